@@ -1,0 +1,32 @@
+"""deformclosure: D-space, deform closure and optimal two-jaw grasps of deformable planar parts.
+
+Implements and extends K. Gopalakrishnan and K. Goldberg, "D-Space and Deform Closure
+Grasps of Deformable Parts", International Journal of Robotics Research 24(11), 2005.
+
+The top level re-exports the core pipeline; plotting and the CLI are imported lazily
+from their own subpackages.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .elasticity import (FreeBodySolver, element_strains, principal_strains, read_stiffness,
+                         rigid_modes, stiffness_matrix, strain_magnitude)
+from .errors import (BatchError, DeformClosureError, FingerError, GraspError, MeshError,
+                     PartError, StiffnessError)
+from .mesh import Mesh, mesh_part, read_mesh, write_mesh
+from .part import Material, MeshOptions, Part, demo_part
+
+try:
+    __version__ = version("deformclosure")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0"
+
+__all__ = [
+    "__version__",
+    "Part", "Material", "MeshOptions", "demo_part",
+    "Mesh", "mesh_part", "read_mesh", "write_mesh",
+    "stiffness_matrix", "element_strains", "principal_strains", "strain_magnitude",
+    "FreeBodySolver", "rigid_modes", "read_stiffness",
+    "DeformClosureError", "PartError", "MeshError", "StiffnessError", "GraspError",
+    "FingerError", "BatchError",
+]

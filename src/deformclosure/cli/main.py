@@ -1,0 +1,69 @@
+"""Command-line interface ``deformclosure`` (SPEC §5).
+
+Every subcommand is a thin call into the library and writes a JSON report with ``-o``.
+User errors print one line ``error: ...`` on stderr and exit with code 2.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from .. import __version__
+from ..errors import DeformClosureError
+
+__all__ = ["cli", "main", "run"]
+
+EPILOG = """\b
+Examples:
+  deformclosure demo
+  deformclosure mesh examples/rectangle.json -o mesh.json --plot mesh.png
+  deformclosure optimize examples/rectangle.json --at 0,10 12,10 -o report.json --plot out/
+"""
+
+
+@click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="deformclosure")
+def cli() -> None:
+    """How well do rigid jaws or fingers hold a deformable planar part?
+
+    D-space, deform closure and optimal two-jaw grasps (Gopalakrishnan & Goldberg,
+    IJRR 2005). Lengths in JSON reports are in metres, energies in joules.
+    """
+
+
+def _register() -> None:
+    from . import demo, mesh_cmd
+
+    cli.add_command(demo.command, "demo")
+    cli.add_command(mesh_cmd.command, "mesh")
+
+
+_register()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; return the exit code (0 ok, 2 bad input)."""
+    try:
+        rv = cli.main(args=argv, prog_name="deformclosure", standalone_mode=False)
+    except DeformClosureError as err:
+        click.echo(f"error: {err}", err=True)
+        return 2
+    except click.exceptions.Abort:
+        click.echo("aborted", err=True)
+        return 130
+    except click.ClickException as err:
+        err.show()
+        return err.exit_code
+    except click.exceptions.Exit as err:
+        return err.exit_code
+    except KeyboardInterrupt:
+        click.echo("interrupted", err=True)
+        return 130
+    return rv if isinstance(rv, int) else 0
+
+
+def run() -> None:  # pragma: no cover - console-script entry point
+    """Console-script entry point."""
+    sys.exit(main())

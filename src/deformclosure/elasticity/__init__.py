@@ -1,0 +1,14 @@
+"""Linear elasticity of CST meshes: stiffness, strains, free-body solves, external K."""
+
+from .external import check_stiffness, read_stiffness
+from .solve import FreeBodySolver, pinned_dofs, rigid_modes
+from .stiffness import (assemble, constitutive_matrix, element_b_matrices, element_stiffness,
+                        stiffness_matrix)
+from .strain import element_strains, element_stresses, principal_strains, strain_magnitude
+
+__all__ = [
+    "stiffness_matrix", "constitutive_matrix", "element_b_matrices", "element_stiffness",
+    "assemble", "element_strains", "element_stresses", "principal_strains",
+    "strain_magnitude", "FreeBodySolver", "rigid_modes", "pinned_dofs", "read_stiffness",
+    "check_stiffness",
+]

@@ -1,0 +1,163 @@
+"""Quality triangulation of a part with Shewchuk's Triangle (via the ``triangle`` package).
+
+Extra points (intended contact locations) become mesh nodes: points on the boundary
+split the boundary segment they lie on, interior points are inserted as vertices.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import triangle as tr
+import shapely
+from scipy.spatial import cKDTree
+from shapely.geometry import Polygon
+
+from ..errors import MeshError, PartError
+from ..part import MAX_TRIANGLES, Part
+from .core import Mesh
+
+__all__ = ["mesh_part", "insert_points_in_ring"]
+
+
+def insert_points_in_ring(ring: np.ndarray, points: np.ndarray, tol: float
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """Insert the ``points`` lying on ``ring``'s edges (within ``tol``) as ring vertices.
+
+    Parameters
+    ----------
+    ring : ndarray, shape (k, 2)
+        Closed ring without repeated first vertex (m).
+    points : ndarray, shape (q, 2)
+        Candidate points (m).
+    tol : float
+        Distance (m) within which a point counts as lying on an edge.
+
+    Returns
+    -------
+    new_ring : ndarray
+        Ring with the points inserted in order along each edge (points that coincide
+        with an existing vertex are snapped to it).
+    on_ring : ndarray of bool, shape (q,)
+        Which points were on the ring.
+    """
+    a = ring
+    b = np.roll(ring, -1, axis=0)
+    ab = b - a
+    L2 = (ab**2).sum(1)
+    # Projection parameter of every point on every edge: (q, k).
+    t = ((points[:, None, :] - a[None]) * ab[None]).sum(-1) / L2[None]
+    tc = np.clip(t, 0.0, 1.0)
+    proj = a[None] + tc[..., None] * ab[None]
+    dist = np.linalg.norm(points[:, None, :] - proj, axis=-1)
+    edge = dist.argmin(axis=1)
+    on = dist[np.arange(len(points)), edge] <= tol
+    tt = tc[np.arange(len(points)), edge]
+    # Points at an existing vertex need no insertion.
+    Lk = np.sqrt(L2[edge])
+    interior = on & (tt * Lk > tol) & ((1 - tt) * Lk > tol)
+    if not interior.any():
+        return ring, on
+    # Sort key: edge index + parameter along the edge puts inserted points in order.
+    keys = np.concatenate([np.arange(len(ring), dtype=float), edge[interior] + tt[interior]])
+    coords = np.concatenate([ring, points[interior]])
+    order = np.argsort(keys, kind="stable")
+    new = coords[order]
+    keep = np.ones(len(new), bool)
+    keep[1:] = np.linalg.norm(np.diff(new, axis=0), axis=1) > tol
+    return new[keep], on
+
+
+def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None = None,
+              points: np.ndarray | None = None) -> Mesh:
+    """Quality-mesh a part with linear triangles.
+
+    Parameters
+    ----------
+    part : Part
+    max_area : float, optional
+        Largest triangle area (m²). Default: the part's ``mesh.max_area``, else area/400.
+    min_angle : float, optional
+        Smallest angle (degrees, ≤ 34). Default: the part's ``mesh.min_angle``.
+    points : ndarray, shape (k, 2), optional
+        Extra points (m) to insert as nodes, in addition to the part's ``mesh.points``.
+
+    Returns
+    -------
+    Mesh
+        Counter-clockwise triangles, outer loop CCW, holes CW, ``material`` set.
+
+    Raises
+    ------
+    PartError
+        Bad mesh options or points outside the part.
+    MeshError
+        If the mesher fails.
+    """
+    opts = part.mesh_options
+    area = part.area
+    max_area = opts.max_area if max_area is None else float(max_area)
+    if max_area is None:
+        max_area = area / 400.0
+    if not (np.isfinite(max_area) and max_area > 0):
+        raise PartError(f"max_area = {max_area!r}: must be a finite area > 0")
+    if area / max_area > MAX_TRIANGLES:
+        raise PartError(f"max_area = {max_area:.3g} m²: would need about {area / max_area:.3g} "
+                        f"triangles (limit {MAX_TRIANGLES:.0e}); increase max_area")
+    min_angle = opts.min_angle if min_angle is None else float(min_angle)
+    if not (0 < min_angle <= 34):
+        raise PartError(f"min_angle = {min_angle!r}: use 0 < min_angle <= 34 degrees")
+    pts = np.asarray(opts.points, float).reshape(-1, 2)
+    if points is not None:
+        pts = np.concatenate([pts, np.asarray(points, float).reshape(-1, 2)])
+    diam = part.diameter
+    tol = 1e-9 * diam
+    poly = part.polygon
+    if len(pts):
+        outside = shapely.distance(shapely.points(pts), poly) > tol
+        if outside.any():
+            bad = int(np.flatnonzero(outside)[0])
+            raise PartError(f"points[{bad}]: point lies outside the part; move it onto or inside the part")
+
+    rings = [part.outer] + list(part.holes)
+    remaining = np.ones(len(pts), bool)
+    new_rings = []
+    for ring in rings:
+        if len(pts):
+            ring, on = insert_points_in_ring(ring, pts, tol)
+            remaining &= ~on
+        new_rings.append(ring)
+    interior_pts = pts[remaining]
+
+    verts = np.concatenate(new_rings + [interior_pts])
+    segs = []
+    off = 0
+    for ring in new_rings:
+        k = len(ring)
+        idx = np.arange(off, off + k)
+        segs.append(np.column_stack([idx, np.roll(idx, -1)]))
+        off += k
+    geom: dict = {"vertices": verts, "segments": np.concatenate(segs)}
+    if part.holes:
+        geom["holes"] = np.array([Polygon(h).representative_point().coords[0] for h in part.holes])
+    # Triangle's switch parser does not read exponents: write plain decimals.
+    flags = (f"pq{np.format_float_positional(min_angle, trim='-')}"
+             f"a{np.format_float_positional(max_area, trim='-')}Q")
+    try:
+        out = tr.triangulate(geom, flags)
+    except Exception as err:  # the C library reports failures as generic errors
+        raise MeshError(f"the mesher failed ({err}); check the part geometry and mesh options") from None
+    nodes = np.asarray(out["vertices"], float)
+    tris = np.asarray(out["triangles"], np.int64)
+    # Triangle may leave unused input vertices (duplicates); drop them, keeping order.
+    used = np.zeros(len(nodes), bool)
+    used[tris.ravel()] = True
+    if not used.all():
+        remap = np.cumsum(used) - 1
+        nodes = nodes[used]
+        tris = remap[tris]
+    mesh = Mesh.from_arrays(nodes, tris, material=part.material, name=part.name)
+    if len(pts):
+        d, _ = cKDTree(mesh.nodes).query(pts)
+        if np.any(d > tol * 10):
+            raise MeshError("an inserted point did not become a mesh node; report this as a bug")
+    return mesh

@@ -1,0 +1,200 @@
+"""Mesh files: the package's mesh JSON (SPEC §5) and every triangle mesh meshio reads.
+
+Mesh JSON::
+
+    {"format": "deformclosure-mesh/1", "units": "m",
+     "nodes": [[x, y], ...], "triangles": [[i, j, k], ...],
+     "boundary": {"outer": [i, ...], "holes": [[i, ...], ...]},
+     "material": {"youngs_modulus": ..., "poisson_ratio": ..., "thickness": ...,
+                  "elastic_limit_strain": ..., "plane": "stress"}}
+
+Lengths are in metres when written; on reading, ``units`` may be any supported unit
+(thickness is in the same unit). The boundary loops in the file are checked against
+the loops recovered from the triangles.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import MeshError, PartError
+from ..part import Material
+from ..units import length_scale
+from .core import Mesh
+
+__all__ = ["MESH_FORMAT", "mesh_to_dict", "mesh_from_dict", "read_mesh", "write_mesh",
+           "is_mesh_file"]
+
+MESH_FORMAT = "deformclosure-mesh/1"
+
+
+def mesh_to_dict(mesh: Mesh) -> dict[str, Any]:
+    """The SPEC §5 mesh JSON structure (SI) of ``mesh``."""
+    d: dict[str, Any] = {
+        "format": MESH_FORMAT,
+        "name": mesh.name,
+        "units": "m",
+        "nodes": mesh.nodes.tolist(),
+        "triangles": mesh.triangles.tolist(),
+        "boundary": {"outer": mesh.outer_loop.tolist(),
+                     "holes": [h.tolist() for h in mesh.hole_loops]},
+    }
+    if mesh.material is not None:
+        d["material"] = mesh.material.to_dict()
+    return d
+
+
+def _same_loop(a: np.ndarray, b: np.ndarray) -> bool:
+    if len(a) != len(b) or len(a) == 0:
+        return False
+    i = np.flatnonzero(b == a[0])
+    return len(i) == 1 and np.array_equal(np.roll(b, -int(i[0])), a)
+
+
+def mesh_from_dict(data: Any) -> Mesh:
+    """Validated :class:`Mesh` from the mesh JSON structure.
+
+    Raises
+    ------
+    MeshError
+    """
+    if not isinstance(data, dict):
+        raise MeshError("mesh file: top level must be a JSON object {...}")
+    allowed = {"format", "name", "units", "nodes", "triangles", "boundary", "material"}
+    extra = set(data) - allowed
+    if extra:
+        raise MeshError(f"{sorted(extra)[0]}: unknown key in mesh file; remove it")
+    if data.get("format") != MESH_FORMAT:
+        raise MeshError(f"format: expected {MESH_FORMAT!r}, got {data.get('format')!r}")
+    for key in ("units", "nodes", "triangles"):
+        if key not in data:
+            raise MeshError(f"{key}: required field is missing; add it")
+    try:
+        scale = length_scale(data["units"], "units")
+    except Exception as err:
+        raise MeshError(str(err)) from None
+    try:
+        nodes = np.asarray(data["nodes"], dtype=float) * scale
+        tris_raw = np.asarray(data["triangles"])
+    except (TypeError, ValueError):
+        raise MeshError("nodes/triangles: must be lists of [x, y] numbers and [i, j, k] integers") from None
+    if tris_raw.dtype.kind not in "iu":
+        raise MeshError("triangles: node ids must be integers")
+    material = None
+    if data.get("material") is not None:
+        m = data["material"]
+        if not isinstance(m, dict):
+            raise MeshError("material: must be an object")
+        keys = {"youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain", "plane"}
+        if set(m) - keys:
+            raise MeshError(f"material.{sorted(set(m) - keys)[0]}: unknown key; remove it")
+        missing = keys - {"plane"} - set(m)
+        if missing:
+            raise MeshError(f"material.{sorted(missing)[0]}: required field is missing; add it")
+        try:
+            vals = [m[k] for k in ("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain")]
+            if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
+                raise MeshError("material: values must be numbers")
+            material = Material(float(vals[0]), float(vals[1]), float(vals[2]) * scale,
+                                float(vals[3]), m.get("plane", "stress"))
+        except PartError as err:
+            raise MeshError(str(err)) from None
+    mesh = Mesh.from_arrays(nodes, tris_raw, material=material, name=str(data.get("name", "part")))
+    b = data.get("boundary")
+    if b is not None:
+        try:
+            outer = np.asarray(b["outer"], dtype=np.int64)
+            holes = [np.asarray(h, dtype=np.int64) for h in b.get("holes", [])]
+        except (KeyError, TypeError, ValueError):
+            raise MeshError("boundary: expected {\"outer\": [ids], \"holes\": [[ids], ...]}") from None
+        if not _same_loop(mesh.outer_loop, outer):
+            raise MeshError("boundary.outer: does not match the outer boundary of the triangles "
+                            "(counter-clockwise, listed once); fix it or omit 'boundary'")
+        if len(holes) != len(mesh.hole_loops) or not all(
+                any(_same_loop(h, g) for g in mesh.hole_loops) for h in holes):
+            raise MeshError("boundary.holes: do not match the hole boundaries of the triangles "
+                            "(clockwise, listed once); fix them or omit 'boundary'")
+    return mesh
+
+
+def is_mesh_file(path: str | Path) -> bool:
+    """True if ``path`` is a mesh (mesh JSON or a meshio format), not a part file."""
+    path = Path(path)
+    if path.suffix.lower() != ".json":
+        return True
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return isinstance(data, dict) and "format" in data and "outer" not in data
+
+
+def read_mesh(path: str | Path, units: str = "m", material: Material | None = None) -> Mesh:
+    """Read a mesh JSON file or any triangle mesh meshio reads.
+
+    Parameters
+    ----------
+    path : path-like
+    units : str
+        Length unit of a meshio file's coordinates (mesh JSON states its own).
+    material : Material, optional
+        Material to attach (overrides the file's).
+
+    Raises
+    ------
+    MeshError
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(path.read_text())
+        except OSError as err:
+            raise MeshError(f"{path}: cannot read mesh file ({err.strerror})") from None
+        except json.JSONDecodeError as err:
+            raise MeshError(f"{path}: not valid JSON ({err.msg} at line {err.lineno}); fix the syntax") from None
+        mesh = mesh_from_dict(data)
+    else:
+        import meshio
+
+        try:
+            m = meshio.read(path)
+        except Exception as err:  # meshio raises many types for unreadable files
+            raise MeshError(f"{path}: meshio cannot read this file ({err})") from None
+        tris = [c.data for c in m.cells if c.type == "triangle"]
+        if not tris:
+            raise MeshError(f"{path}: contains no linear triangles ('triangle' cells)")
+        if any(c.type not in ("triangle", "line", "vertex") for c in m.cells):
+            kinds = sorted({c.type for c in m.cells} - {"triangle", "line", "vertex"})
+            raise MeshError(f"{path}: unsupported cell types {kinds}; export linear triangles")
+        pts = np.asarray(m.points, float)
+        if pts.shape[1] == 3 and np.any(pts[:, 2] != 0):
+            raise MeshError(f"{path}: node z coordinates are not all 0; a planar mesh is required")
+        tri = np.concatenate(tris).astype(np.int64)
+        # meshio files often carry geometry points unused by any triangle: drop them.
+        used = np.zeros(len(pts), bool)
+        used[tri.ravel()] = True
+        remap = np.cumsum(used) - 1
+        try:
+            scale = length_scale(units, "units")
+        except Exception as err:
+            raise MeshError(str(err)) from None
+        mesh = Mesh.from_arrays(pts[used, :2] * scale, remap[tri], name=path.stem)
+    if material is not None:
+        mesh = mesh.with_material(material)
+    return mesh
+
+
+def write_mesh(mesh: Mesh, path: str | Path) -> None:
+    """Write ``mesh`` as mesh JSON (``.json``) or with meshio (any other suffix)."""
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        path.write_text(json.dumps(mesh_to_dict(mesh)))
+    else:
+        import meshio
+
+        meshio.write_points_cells(path, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
+                                  [("triangle", mesh.triangles)])

@@ -1,0 +1,413 @@
+"""Parts: a polygon with polygonal holes and a linear-elastic material (SPEC §1, §5).
+
+A part file is JSON::
+
+    {"name": "rubber", "units": "mm",
+     "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
+     "holes": [],
+     "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
+                  "elastic_limit_strain": 0.8, "plane": "stress"},
+     "mesh": {"max_area": 0.5, "min_angle": 30, "points": [[6, 0], [6, 20]]}}
+
+``youngs_modulus`` is in Pa; every length (coordinates, thickness, points) is in
+``units`` and ``max_area`` in ``units``². On reading, everything is converted to SI
+and the rings are normalised: outer ring counter-clockwise, holes clockwise, closing
+duplicate point and repeated consecutive points removed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import shapely
+from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
+from shapely.geometry import LinearRing, Polygon
+
+from .errors import PartError
+from .units import LENGTH_UNITS, length_scale
+
+__all__ = [
+    "Material",
+    "MeshOptions",
+    "Part",
+    "demo_part",
+    "MAX_TRIANGLES",
+]
+
+#: Largest number of triangles a mesh request may ask for (area / max_area).
+MAX_TRIANGLES = 4_000_000
+
+
+# --------------------------------------------------------------------------- schema
+class _MaterialModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    youngs_modulus: float
+    poisson_ratio: float
+    thickness: float = 1.0
+    elastic_limit_strain: float
+    plane: Literal["stress", "strain"] = "stress"
+
+    @field_validator("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain",
+                     mode="before")
+    @classmethod
+    def _int_to_float(cls, v: Any) -> Any:
+        if isinstance(v, int) and not isinstance(v, bool):
+            return float(v)
+        return v
+
+
+class _MeshModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    max_area: float | None = None
+    min_angle: float = 30.0
+    points: list[list[float]] = []
+
+    @field_validator("max_area", "min_angle", mode="before")
+    @classmethod
+    def _int_to_float(cls, v: Any) -> Any:
+        if isinstance(v, int) and not isinstance(v, bool):
+            return float(v)
+        return v
+
+    @field_validator("points", mode="before")
+    @classmethod
+    def _points_float(cls, v: Any) -> Any:
+        return _coerce_coords(v)
+
+
+def _coerce_coords(v: Any) -> Any:
+    """Accept ints where floats are expected inside coordinate lists (strict mode)."""
+    if isinstance(v, list):
+        return [
+            [float(c) if isinstance(c, int) and not isinstance(c, bool) else c for c in p]
+            if isinstance(p, list) else p
+            for p in v
+        ]
+    return v
+
+
+class _PartModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    name: str = "part"
+    units: str
+    outer: list[list[float]]
+    holes: list[list[list[float]]] = []
+    material: _MaterialModel
+    mesh: _MeshModel = _MeshModel()
+
+    @field_validator("outer", mode="before")
+    @classmethod
+    def _outer_float(cls, v: Any) -> Any:
+        return _coerce_coords(v)
+
+    @field_validator("holes", mode="before")
+    @classmethod
+    def _holes_float(cls, v: Any) -> Any:
+        if isinstance(v, list):
+            return [_coerce_coords(h) for h in v]
+        return v
+
+
+def _pydantic_message(err: ValidationError) -> str:
+    """One line naming the first offending field and what is wrong with it."""
+    e = err.errors()[0]
+    loc = ".".join(str(p) for p in e["loc"]) or "part"
+    kind = e["type"]
+    if kind == "extra_forbidden":
+        return f"{loc}: unknown key; remove it (allowed keys are listed in the part-file format, SPEC §5)"
+    if kind == "missing":
+        return f"{loc}: required field is missing; add it"
+    if kind == "literal_error":
+        return f"{loc}: {e['msg'].lower()}"
+    inp = e.get("input")
+    return f"{loc}: {e['msg'].lower()} (got {inp!r:.60})"
+
+
+# --------------------------------------------------------------------------- values
+@dataclass(frozen=True)
+class Material:
+    """Linear-elastic isotropic material of a planar part.
+
+    Attributes
+    ----------
+    youngs_modulus : float
+        Young's modulus ``E`` (Pa), > 0.
+    poisson_ratio : float
+        Poisson ratio ``nu``, -1 < nu < 0.5.
+    thickness : float
+        Out-of-plane thickness ``t`` (m), > 0.
+    elastic_limit_strain : float
+        Elastic-limit strain ``e_L`` (dimensionless), > 0, compared with the largest
+        absolute in-plane principal strain of an element.
+    plane : {"stress", "strain"}
+        Plane stress (thin sheet, default) or plane strain (long prism).
+    """
+
+    youngs_modulus: float
+    poisson_ratio: float
+    thickness: float
+    elastic_limit_strain: float
+    plane: str = "stress"
+
+    def __post_init__(self) -> None:
+        _check_material(self.youngs_modulus, self.poisson_ratio, self.thickness,
+                        self.elastic_limit_strain, self.plane, prefix="material")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict in SI units (thickness in m)."""
+        return {
+            "youngs_modulus": self.youngs_modulus,
+            "poisson_ratio": self.poisson_ratio,
+            "thickness": self.thickness,
+            "elastic_limit_strain": self.elastic_limit_strain,
+            "plane": self.plane,
+        }
+
+
+def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
+                    prefix: str) -> None:
+    checks = [
+        ("youngs_modulus", E, math.isfinite(E) and E > 0,
+         "must be a finite number > 0 in Pa (e.g. 2e6 for soft rubber)"),
+        ("poisson_ratio", nu, math.isfinite(nu) and -1.0 < nu < 0.5,
+         "must satisfy -1 < poisson_ratio < 0.5 (0.5 is incompressible; use 0.49)"),
+        ("thickness", t, math.isfinite(t) and t > 0, "must be a finite number > 0"),
+        ("elastic_limit_strain", eL, math.isfinite(eL) and eL > 0,
+         "must be a finite strain > 0 (e.g. 0.8)"),
+    ]
+    for name, value, ok, fix in checks:
+        if not ok:
+            raise PartError(f"{prefix}.{name} = {value!r}: {fix}")
+    if plane not in ("stress", "strain"):
+        raise PartError(f"{prefix}.plane = {plane!r}: use 'stress' or 'strain'")
+
+
+@dataclass(frozen=True)
+class MeshOptions:
+    """Mesher settings of a part, SI.
+
+    Attributes
+    ----------
+    max_area : float or None
+        Largest triangle area (m²); ``None`` chooses area/400.
+    min_angle : float
+        Smallest triangle angle (degrees), 0 < min_angle ≤ 34.
+    points : ndarray, shape (k, 2)
+        Extra points (m) inserted as mesh nodes, e.g. intended contact locations.
+    """
+
+    max_area: float | None = None
+    min_angle: float = 30.0
+    points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+
+@dataclass(frozen=True)
+class Part:
+    """A planar deformable part: polygon with holes plus material, in SI units.
+
+    Attributes
+    ----------
+    name : str
+    units : str
+        The unit the part was described in (used for printing only).
+    outer : ndarray, shape (n, 2)
+        Outer ring (m), counter-clockwise, not closed.
+    holes : tuple of ndarray
+        Hole rings (m), clockwise, not closed.
+    material : Material
+    mesh_options : MeshOptions
+    """
+
+    name: str
+    units: str
+    outer: np.ndarray
+    holes: tuple[np.ndarray, ...]
+    material: Material
+    mesh_options: MeshOptions = field(default_factory=MeshOptions)
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def from_dict(cls, data: Any) -> "Part":
+        """Build a validated part from the JSON structure of SPEC §5.
+
+        Raises
+        ------
+        PartError
+            With a one-line message naming the offending field and the fix.
+        """
+        if not isinstance(data, dict):
+            raise PartError("part file: top level must be a JSON object {...}")
+        try:
+            model = _PartModel.model_validate(data)
+        except ValidationError as err:
+            raise PartError(_pydantic_message(err)) from None
+        scale = length_scale(model.units, "units") if model.units in LENGTH_UNITS else None
+        if scale is None:
+            valid = ", ".join(repr(u) for u in LENGTH_UNITS)
+            raise PartError(f"units: unknown length unit {model.units!r}; use one of {valid}")
+        outer = _clean_ring(model.outer, "outer") * scale
+        holes = tuple(_clean_ring(h, f"holes[{i}]") * scale for i, h in enumerate(model.holes))
+        mat = model.material
+        _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
+                        mat.elastic_limit_strain, mat.plane, prefix="material")
+        material = Material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
+                            mat.elastic_limit_strain, mat.plane)
+        outer, holes = _validate_geometry(outer, holes)
+        opts = _validate_mesh_options(model.mesh, scale, outer, holes)
+        return cls(model.name, model.units, outer, holes, material, opts)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "Part":
+        """Read and validate a part file (JSON, SPEC §5)."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as err:
+            raise PartError(f"{path}: cannot read part file ({err.strerror})") from None
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise PartError(f"{path}: not valid JSON ({err.msg} at line {err.lineno}); fix the syntax") from None
+        return cls.from_dict(data)
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def polygon(self) -> Polygon:
+        """The part as a shapely polygon (m)."""
+        return Polygon(self.outer, [h for h in self.holes])
+
+    @property
+    def area(self) -> float:
+        """Area (m²)."""
+        return float(self.polygon.area)
+
+    @property
+    def diameter(self) -> float:
+        """Largest distance between two outer-ring vertices (m)."""
+        d = self.outer[:, None, :] - self.outer[None, :, :]
+        return float(np.sqrt((d**2).sum(-1)).max())
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict in SI units (``units = "m"``)."""
+        opts = self.mesh_options
+        return {
+            "name": self.name,
+            "units": "m",
+            "outer": self.outer.tolist(),
+            "holes": [h.tolist() for h in self.holes],
+            "material": self.material.to_dict(),
+            "mesh": {
+                "max_area": opts.max_area,
+                "min_angle": opts.min_angle,
+                "points": np.asarray(opts.points).tolist(),
+            },
+        }
+
+
+# --------------------------------------------------------------------------- checks
+def _clean_ring(coords: list[list[float]], fld: str) -> np.ndarray:
+    if any(len(p) != 2 for p in coords):
+        raise PartError(f"{fld}: every point must be a pair [x, y]")
+    ring = np.asarray(coords, dtype=float).reshape(-1, 2)
+    if not np.all(np.isfinite(ring)):
+        bad = int(np.argwhere(~np.isfinite(ring))[0, 0])
+        raise PartError(f"{fld}[{bad}]: coordinate is not finite (NaN or inf); give numbers")
+    if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]
+    keep = np.any(ring != np.roll(ring, 1, axis=0), axis=1) if len(ring) > 1 else np.ones(len(ring), bool)
+    ring = ring[keep]
+    if len(ring) < 3:
+        raise PartError(f"{fld}: a ring needs at least 3 distinct points (got {len(ring)})")
+    return ring
+
+
+def _signed_area(ring: np.ndarray) -> float:
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _validate_geometry(outer: np.ndarray, holes: tuple[np.ndarray, ...]
+                       ) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
+    scale = float(np.ptp(outer, axis=0).max())
+    rings = [("outer", outer)] + [(f"holes[{i}]", h) for i, h in enumerate(holes)]
+    for fld, ring in rings:
+        lr = LinearRing(ring)
+        if not lr.is_simple:
+            raise PartError(f"{fld}: ring is self-intersecting; reorder its points so edges do not cross")
+        if abs(_signed_area(ring)) <= 1e-12 * scale**2:
+            raise PartError(f"{fld}: ring has zero area; give at least 3 non-collinear points")
+    if _signed_area(outer) < 0:
+        outer = outer[::-1].copy()
+    holes = tuple(h[::-1].copy() if _signed_area(h) > 0 else h for h in holes)
+    outer_poly = Polygon(outer)
+    hole_polys = [Polygon(h) for h in holes]
+    for i, hp in enumerate(hole_polys):
+        if not outer_poly.contains(hp) or hp.exterior.intersects(outer_poly.exterior):
+            raise PartError(f"holes[{i}]: hole is not strictly inside the outer ring; move it inside")
+    if hole_polys:
+        tree = shapely.STRtree(hole_polys)
+        pairs = tree.query(hole_polys, predicate="intersects")
+        pairs = pairs[:, pairs[0] < pairs[1]]
+        if pairs.shape[1]:
+            i, j = int(pairs[0, 0]), int(pairs[1, 0])
+            raise PartError(f"holes[{i}] and holes[{j}] overlap or touch; holes must be pairwise disjoint")
+    return outer, holes
+
+
+def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
+                           holes: tuple[np.ndarray, ...]) -> MeshOptions:
+    poly = Polygon(outer, list(holes))
+    if not (math.isfinite(m.min_angle) and 0.0 < m.min_angle <= 34.0):
+        raise PartError(f"mesh.min_angle = {m.min_angle!r}: use 0 < min_angle <= 34 degrees "
+                        "(the quality mesher cannot guarantee more)")
+    max_area = None
+    if m.max_area is not None:
+        if not (math.isfinite(m.max_area) and m.max_area > 0):
+            raise PartError(f"mesh.max_area = {m.max_area!r}: must be a finite area > 0 in units²")
+        max_area = m.max_area * scale**2
+        n_est = poly.area / max_area
+        if n_est > MAX_TRIANGLES:
+            raise PartError(f"mesh.max_area = {m.max_area!r}: would need about {n_est:.3g} triangles "
+                            f"(limit {MAX_TRIANGLES:.0e}); increase max_area")
+    if any(len(p) != 2 for p in m.points):
+        raise PartError("mesh.points: every point must be a pair [x, y]")
+    pts = np.asarray(m.points, dtype=float).reshape(-1, 2) * scale
+    if not np.all(np.isfinite(pts)):
+        raise PartError("mesh.points: coordinate is not finite (NaN or inf); give numbers")
+    if len(pts):
+        tol = 1e-9 * float(np.ptp(outer, axis=0).max())
+        inside = shapely.dwithin(shapely.points(pts), poly, tol)
+        if not inside.all():
+            bad = int(np.flatnonzero(~inside)[0])
+            raise PartError(f"mesh.points[{bad}]: point lies outside the part; move it onto or inside the part")
+    return MeshOptions(max_area=max_area, min_angle=float(m.min_angle), points=pts)
+
+
+# --------------------------------------------------------------------------- demo
+def demo_part(max_area_mm2: float = 1.0) -> Part:
+    """The built-in rubber part of the paper's example (12 × 20 mm, SPEC / issue 2).
+
+    A 12 mm wide, 20 mm tall block of soft rubber, E = 2 MPa, nu = 0.1,
+    e_L = 0.8, thickness 1 mm, plane stress.  Nodes are forced at the mid-points of
+    the two long sides, where the demo places its jaws (12 mm apart at rest); the
+    demo also reports the quality at the paper's example separation of 10 mm.
+
+    Parameters
+    ----------
+    max_area_mm2 : float
+        Largest triangle area (mm²).
+    """
+    return Part.from_dict({
+        "name": "rubber-12x20",
+        "units": "mm",
+        "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
+        "holes": [],
+        "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
+                     "elastic_limit_strain": 0.8, "plane": "stress"},
+        "mesh": {"max_area": max_area_mm2, "min_angle": 30, "points": [[0, 10], [12, 10]]},
+    })

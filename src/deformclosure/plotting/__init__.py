@@ -1,0 +1,1 @@
+"""Plots (matplotlib, imported lazily). Every function takes ``ax=None`` and returns the axes."""
