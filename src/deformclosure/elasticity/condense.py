@@ -1,0 +1,185 @@
+"""Compliance of a free part condensed onto a set of boundary nodes (static condensation).
+
+For the two-jaw problem we need, for every pair of perimeter nodes, the compliance of
+the part under a self-equilibrated pair of forces (SPEC §4). All of them follow from
+one matrix: the compliance ``C`` of the chosen boundary DOFs, i.e. the inverse of the
+Schur complement ``S = K_bb - K_bi K_ii⁻¹ K_ib`` (with the 3 rigid modes removed by
+pinning 3 boundary DOFs).
+
+We get ``S`` from a single sparse LU factorisation in which the interior nodes are
+ordered first, by METIS nested dissection, and the boundary DOFs last: with no pivoting,
+``A = L U`` gives ``S = L₂₂ U₂₂`` (the trailing blocks), so no solve with many
+right-hand sides is needed. The same factorisation then solves for whole displacement
+fields (strains at the jaw pair).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import StiffnessError
+from .solve import pinned_dofs, rigid_modes
+
+__all__ = ["CondensedCompliance", "node_adjacency", "nested_dissection_order"]
+
+
+def node_adjacency(triangles: np.ndarray, n_nodes: int) -> sp.csr_matrix:
+    """Symmetric node adjacency (no diagonal) of a triangle mesh, CSR bool."""
+    e = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    A = sp.coo_matrix((np.ones(len(e), bool), (e[:, 0], e[:, 1])), shape=(n_nodes, n_nodes))
+    A = (A + A.T).tocsr()
+    A.setdiag(False)
+    A.eliminate_zeros()
+    A.sort_indices()
+    return A
+
+
+def nested_dissection_order(adjacency: sp.csr_matrix) -> np.ndarray:
+    """Fill-reducing elimination order (METIS nested dissection) of a graph's vertices."""
+    n = adjacency.shape[0]
+    if n <= 2:
+        return np.arange(n)
+    import pymetis
+
+    adj = pymetis.CSRAdjacency(adjacency.indptr.astype(np.int64), adjacency.indices.astype(np.int64)) \
+        if hasattr(pymetis, "CSRAdjacency") else None
+    if adj is not None:
+        perm, _ = pymetis.nested_dissection(adj)
+    else:  # pragma: no cover - older pymetis
+        perm, _ = pymetis.nested_dissection(xadj=adjacency.indptr, adjncy=adjacency.indices)
+    return np.asarray(perm, dtype=np.int64)
+
+
+class CondensedCompliance:
+    """One factorisation of a free part's ``K``; compliance of chosen boundary nodes.
+
+    Parameters
+    ----------
+    K : sparse matrix, shape (2n, 2n)
+        Stiffness (N/m) of the free part (null space = rigid modes).
+    nodes : ndarray, shape (n, 2)
+        Node coordinates (m).
+    triangles : ndarray, shape (m, 3)
+        Triangles (for the elimination order).
+    boundary : ndarray of int, shape (q,)
+        Node ids onto which to condense (e.g. perimeter nodes), distinct.
+
+    Attributes
+    ----------
+    boundary : ndarray, shape (q,)
+    C : ndarray, shape (2q, 2q)
+        Compliance (m/N) of the boundary DOFs ``[x, y]`` per node in ``boundary`` order:
+        for a self-equilibrated load ``f`` on them, ``u_b = C f`` up to a rigid motion, so
+        ``fᵀ C f`` (twice the energy per unit load squared) is exact.
+
+    Raises
+    ------
+    StiffnessError
+        If ``K`` has more zero-energy modes than the 3 rigid ones.
+    """
+
+    def __init__(self, K: sp.spmatrix, nodes: np.ndarray, triangles: np.ndarray,
+                 boundary: np.ndarray) -> None:
+        n = len(nodes)
+        boundary = np.asarray(boundary, dtype=np.int64)
+        self.boundary = boundary
+        self.n_nodes = n
+        self._nodes = np.asarray(nodes, float)
+        is_b = np.zeros(n, bool)
+        is_b[boundary] = True
+        interior = np.flatnonzero(~is_b)
+        # Rigid modes: pin 3 DOFs, chosen among the boundary nodes so that the interior
+        # stays untouched (both DOFs of one node, one of a far node).
+        pins = pinned_dofs_among(nodes, boundary)
+        adj = node_adjacency(triangles, n)
+        order_int = interior[nested_dissection_order(adj[interior][:, interior])] \
+            if len(interior) else interior
+        node_order = np.concatenate([order_int, boundary])
+        dof_order = np.column_stack([2 * node_order, 2 * node_order + 1]).ravel()
+        dof_order = dof_order[~np.isin(dof_order, pins)]
+        self.dof_order = dof_order
+        self.pins = pins
+        Kp = sp.csc_matrix(K)[dof_order][:, dof_order].tocsc()
+        try:
+            lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True, "Equil": False})
+        except RuntimeError as err:
+            raise StiffnessError(f"stiffness is singular beyond the 3 rigid modes ({err}); "
+                                 "the mesh is disconnected or a mechanism") from None
+        N = len(dof_order)
+        if not (np.array_equal(lu.perm_r, np.arange(N)) and np.array_equal(lu.perm_c, np.arange(N))):
+            raise StiffnessError("sparse LU reordered the condensation; K is not positive definite "
+                                 "after removing the rigid modes")
+        self._lu = lu
+        nb = 2 * len(boundary) - int(np.isin(pins, _dofs(boundary)).sum())
+        L, U = lu.L, lu.U
+        S = _trailing_block(L, N - nb) @ _trailing_block(U, N - nb)
+        diag = np.diag(S)
+        if np.any(diag <= 0):
+            raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes")
+        # S is SPD: invert through Cholesky (scipy.linalg is LAPACK-backed).
+        import scipy.linalg as sla
+
+        try:
+            cf = sla.cho_factor(0.5 * (S + S.T), lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            raise StiffnessError("condensed stiffness is not positive definite; K has more than "
+                                 "3 zero-energy modes") from None
+        Cb = sla.cho_solve(cf, np.eye(nb), check_finite=False)
+        # Place into the full (2q x 2q) boundary compliance; pinned DOFs get zeros.
+        bd = _dofs(boundary)
+        keep = ~np.isin(bd, pins)
+        C = np.zeros((2 * len(boundary), 2 * len(boundary)))
+        idx = np.flatnonzero(keep)
+        C[np.ix_(idx, idx)] = Cb
+        self.C = C
+        self._pos = np.full(n, -1, dtype=np.int64)
+        self._pos[boundary] = np.arange(len(boundary))
+
+    def position(self, node_ids: np.ndarray) -> np.ndarray:
+        """Row index (node position in ``boundary``) of node ids; -1 if not condensed."""
+        return self._pos[np.asarray(node_ids)]
+
+    def solve(self, f: np.ndarray) -> np.ndarray:
+        """Displacement field (m), shape like ``f`` (``(2n,)`` or ``(2n, r)``), for loads ``f`` (N).
+
+        Valid for self-equilibrated loads; the pinned DOFs are zero.
+        """
+        f = np.asarray(f, float)
+        u = np.zeros(f.shape)
+        u[self.dof_order] = self._lu.solve(np.ascontiguousarray(f[self.dof_order]))
+        return u
+
+    def project_out_rigid(self, u: np.ndarray) -> np.ndarray:
+        """``u`` minus its least-squares rigid part."""
+        R = rigid_modes(self._nodes)
+        coef, *_ = np.linalg.lstsq(R, u, rcond=None)
+        return u - R @ coef
+
+
+def _dofs(nodes_: np.ndarray) -> np.ndarray:
+    return np.column_stack([2 * nodes_, 2 * nodes_ + 1]).ravel()
+
+
+def pinned_dofs_among(nodes: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """Like :func:`pinned_dofs` but choosing the pinned nodes among ``candidates``."""
+    sub = pinned_dofs(nodes[candidates])
+    node = candidates[sub // 2]
+    return 2 * node + sub % 2
+
+
+def _trailing_block(M: sp.spmatrix, start: int) -> np.ndarray:
+    """Dense ``M[start:, start:]`` of a CSC matrix, sliced without copying the rest."""
+    M = sp.csc_matrix(M)
+    N = M.shape[0]
+    lo = M.indptr[start]
+    data = M.data[lo:]
+    rows = M.indices[lo:]
+    counts = np.diff(M.indptr[start:])
+    cols = np.repeat(np.arange(N - start), counts)
+    keep = rows >= start
+    out = np.zeros((N - start, N - start))
+    out[rows[keep] - start, cols[keep]] = data[keep]
+    return out

@@ -1,0 +1,116 @@
+"""Elastic limit of a jaw pair: ``e_max``, ``σ_L`` and ``U_L`` (SPEC §4, paper §4.1).
+
+``e_max`` is the largest element strain magnitude (largest absolute in-plane principal
+strain) produced by a unit change of the jaw distance at ``(n0, n1)`` (1/m; linear, so
+strains scale with the distance change). The part reaches its elastic-limit strain
+``e_L`` when the distance has changed by ``e_L / e_max``:
+
+- contracting: ``σ_L = max(0, σ0 − e_L/e_max)``;
+- expanding:   ``σ_L = σ0 + e_L/e_max``.
+
+``U_L(σ) = U(n0, n1, σ_L) − U(n0, n1, σ)``, the energy still to be stored before the
+elastic limit. (The paper prints ``½ k01 (σ_L² − σ²)``, equal to this only if σ measures
+the compression; we use the energy difference.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..elasticity.condense import CondensedCompliance
+from ..elasticity.strain import strain_magnitude
+from ..errors import GraspError
+from .pair_stiffness import jaw_pair_forces
+
+__all__ = ["ElasticLimit", "elastic_limit", "vertex_energy"]
+
+
+@dataclass(frozen=True)
+class ElasticLimit:
+    """Elastic limit of a jaw pair.
+
+    Attributes
+    ----------
+    k01 : float
+        Pair stiffness at the jaws (N/m).
+    sigma0 : float
+        Rest distance of the jaw nodes (m).
+    e_max : float
+        Largest element strain magnitude per metre of jaw-distance change (1/m).
+    sigma_L : float
+        Jaw separation (m) at which the elastic limit is reached.
+    critical_element : int
+        Element where ``e_max`` occurs.
+    strain_per_length : ndarray, shape (m,)
+        Strain magnitude of every element per metre of distance change (1/m).
+    displacement_per_length : ndarray, shape (2n,)
+        Displacement field per metre of approach (dimensionless, m/m), rigid part removed.
+    """
+
+    k01: float
+    sigma0: float
+    e_max: float
+    sigma_L: float
+    critical_element: int
+    strain_per_length: np.ndarray
+    displacement_per_length: np.ndarray
+
+
+def vertex_energy(sigma: np.ndarray | float, sigma0: np.ndarray | float, k: np.ndarray | float,
+                  mode: str = "contracting") -> np.ndarray:
+    """``U(a, b, σ) = ½ k (σ0 − σ)²`` where the jaws squeeze, else 0 (J).
+
+    Broadcasts over ``sigma`` and the vertex arrays.
+    """
+    sigma = np.asarray(sigma, float)
+    d = np.asarray(sigma0, float) - sigma
+    if mode == "expanding":
+        d = -d
+    elif mode != "contracting":
+        raise GraspError(f"mode = {mode!r}: use 'contracting' or 'expanding'")
+    return np.where(d > 0, 0.5 * np.asarray(k, float) * d * d, 0.0)
+
+
+def elastic_limit(mesh, condensed: CondensedCompliance, n0: int, n1: int, *,
+                  mode: str = "contracting", jaw_width: float = 0.0,
+                  elastic_limit_strain: float | None = None) -> ElasticLimit:
+    """``e_max`` and ``σ_L`` of the jaw pair ``(n0, n1)``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    condensed : CondensedCompliance
+        Factorisation of the part's stiffness including both jaw nodes.
+    n0, n1 : int
+        Jaw nodes.
+    mode : {"contracting", "expanding"}
+    jaw_width : float
+        Jaw contact width (m).
+    elastic_limit_strain : float, optional
+        ``e_L``; defaults to the mesh material's.
+
+    Raises
+    ------
+    GraspError
+    """
+    if mode not in ("contracting", "expanding"):
+        raise GraspError(f"mode = {mode!r}: use 'contracting' or 'expanding'")
+    eL = elastic_limit_strain
+    if eL is None:
+        if mesh.material is None:
+            raise GraspError("no material: the elastic-limit strain e_L is unknown")
+        eL = mesh.material.elastic_limit_strain
+    a, b = (n0, n1) if n0 < n1 else (n1, n0)
+    k, f = jaw_pair_forces(mesh, condensed, a, b, jaw_width)
+    u = condensed.project_out_rigid(condensed.solve(f))
+    strain = strain_magnitude(mesh, u)
+    i = int(np.argmax(strain))
+    e_max = float(strain[i])
+    sigma0 = float(np.linalg.norm(mesh.nodes[b] - mesh.nodes[a]))
+    if not e_max > 0:
+        raise GraspError("the jaw pair produces no strain; check the mesh and stiffness")
+    travel = eL / e_max
+    sigma_L = max(0.0, sigma0 - travel) if mode == "contracting" else sigma0 + travel
+    return ElasticLimit(k, sigma0, e_max, sigma_L, i, strain, u)
