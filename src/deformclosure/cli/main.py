@@ -34,10 +34,11 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import demo, mesh_cmd
+    from . import demo, mesh_cmd, optimize
 
     cli.add_command(demo.command, "demo")
     cli.add_command(mesh_cmd.command, "mesh")
+    cli.add_command(optimize.command, "optimize")
 
 
 _register()

@@ -24,7 +24,7 @@ from ..elasticity.strain import strain_magnitude
 from ..errors import GraspError
 from .pair_stiffness import jaw_pair_forces
 
-__all__ = ["ElasticLimit", "elastic_limit", "vertex_energy"]
+__all__ = ["ElasticLimit", "elastic_limit"]
 
 
 @dataclass(frozen=True)
@@ -56,21 +56,6 @@ class ElasticLimit:
     critical_element: int
     strain_per_length: np.ndarray
     displacement_per_length: np.ndarray
-
-
-def vertex_energy(sigma: np.ndarray | float, sigma0: np.ndarray | float, k: np.ndarray | float,
-                  mode: str = "contracting") -> np.ndarray:
-    """``U(a, b, σ) = ½ k (σ0 − σ)²`` where the jaws squeeze, else 0 (J).
-
-    Broadcasts over ``sigma`` and the vertex arrays.
-    """
-    sigma = np.asarray(sigma, float)
-    d = np.asarray(sigma0, float) - sigma
-    if mode == "expanding":
-        d = -d
-    elif mode != "contracting":
-        raise GraspError(f"mode = {mode!r}: use 'contracting' or 'expanding'")
-    return np.where(d > 0, 0.5 * np.asarray(k, float) * d * d, 0.0)
 
 
 def elastic_limit(mesh, condensed: CondensedCompliance, n0: int, n1: int, *,
