@@ -34,11 +34,12 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import demo, mesh_cmd, optimize
+    from . import demo, mesh_cmd, optimize, plan
 
     cli.add_command(demo.command, "demo")
     cli.add_command(mesh_cmd.command, "mesh")
     cli.add_command(optimize.command, "optimize")
+    cli.add_command(plan.command, "plan")
 
 
 _register()

@@ -10,7 +10,7 @@ from ..units import length_scale
 from .mesh import new_figure, plot_mesh, save_figure
 
 __all__ = ["plot_quality_curve", "plot_deformed_grasp", "plot_energy_landscape",
-           "save_grasp_plots"]
+           "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots"]
 
 
 def plot_quality_curve(analysis, ax=None, units: str = "mm"):
@@ -148,6 +148,77 @@ def save_grasp_plots(analysis, out_dir: str | Path, units: str = "mm") -> list[P
                            ("landscape.png", plot_energy_landscape, (6.5, 5.5))):
         fig, ax = new_figure(size)
         fn(analysis, ax=ax, units=units)
+        save_figure(fig, out / name)
+        paths.append(out / name)
+    return paths
+
+
+def _arclength(mesh, loop_ids) -> tuple[np.ndarray, float]:
+    arc = np.full(mesh.n_nodes, np.nan)
+    off = 0.0
+    for i in loop_ids:
+        lp = mesh.loops[i]
+        seg = np.linalg.norm(np.diff(mesh.nodes[np.append(lp, lp[0])], axis=0), axis=1)
+        arc[lp] = off + np.concatenate([[0.0], np.cumsum(seg[:-1])])
+        off += seg.sum()
+    return arc, off
+
+
+def plot_quality_map(plan, ax=None, units: str = "mm"):
+    """Quality of every jaw pair over (arclength of jaw 1) × (arclength of jaw 2)."""
+    if ax is None:
+        _, ax = new_figure((6.5, 5.5))
+    mesh = plan.model.mesh
+    loops = (0,) if plan.mode == "contracting" else range(len(mesh.loops))
+    arc, total = _arclength(mesh, loops)
+    ids = np.concatenate([mesh.loops[i] for i in loops])
+    ids = ids[np.argsort(arc[ids])]
+    pos = np.full(mesh.n_nodes, -1)
+    pos[ids] = np.arange(len(ids))
+    M = np.full((len(ids), len(ids)), np.nan)
+    M[pos[plan.pairs[:, 0]], pos[plan.pairs[:, 1]]] = plan.quality
+    M[pos[plan.pairs[:, 1]], pos[plan.pairs[:, 0]]] = plan.quality
+    s = 1.0 / length_scale(units)
+    edges = np.append(arc[ids], total) * s
+    pc = ax.pcolormesh(edges, edges, M * 1e3, cmap="magma", shading="flat")
+    ax.figure.colorbar(pc, ax=ax, label="quality Q (mJ)")
+    top = plan.pairs[: min(5, len(plan.pairs))]
+    if len(top):
+        ar = arc[top]
+        ax.plot(ar.min(1) * s, ar.max(1) * s, "o", mfc="none", mec="c", ms=9, label="top pairs")
+        ax.legend(fontsize=8, loc="upper left")
+    ax.set_xlabel(f"jaw 1 arclength ({units})")
+    ax.set_ylabel(f"jaw 2 arclength ({units})")
+    ax.set_aspect("equal")
+    ax.set_title(f"grasp quality over jaw pairs (ε = {plan.epsilon:.3g} J)")
+    return ax
+
+
+def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
+    """The best ``n`` jaw pairs drawn on the part, numbered by rank."""
+    if ax is None:
+        _, ax = new_figure((6, 6))
+    mesh = plan.model.mesh
+    plot_mesh(mesh, ax=ax, units=units)
+    s = 1.0 / length_scale(units)
+    for r, (a, b) in enumerate(plan.pairs[:n]):
+        xy = mesh.nodes[[a, b]] * s
+        ax.plot(xy[:, 0], xy[:, 1], "-o", color=f"C{r % 10}", lw=2, ms=6,
+                label=f"#{r + 1}: Q = {plan.quality[r] * 1e3:.3g} mJ")
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title(f"top {min(n, len(plan.pairs))} jaw pairs")
+    return ax
+
+
+def save_plan_plots(plan, out_dir: str | Path, units: str = "mm") -> list[Path]:
+    """Write ``quality_map.png`` and ``top_grasps.png`` into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, fn, size in (("quality_map.png", plot_quality_map, (6.5, 5.5)),
+                           ("top_grasps.png", plot_top_grasps, (6, 6))):
+        fig, ax = new_figure(size)
+        fn(plan, ax=ax, units=units)
         save_figure(fig, out / name)
         paths.append(out / name)
     return paths
