@@ -319,8 +319,8 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         U = vertex_energies(sig, sigma0, k, mode)
         R = release_energies(U, graph)[idx]
         UL = UsL - U[idx]
-        inside = (sig >= sigma_L - 1e-15 * max(abs(hi), 1e-300)) & (sig <= s0 * (1 + 1e-15)) \
-            if mode == "contracting" else (sig >= s0 * (1 - 1e-15)) & (sig <= sigma_L * (1 + 1e-15))
+        inside = (sig >= sigma_L) & (sig <= s0) if mode == "contracting" \
+            else (sig >= s0) & (sig <= sigma_L)
         Q = np.where(inside, np.minimum(R, UL), -np.inf)
         better = Q > best_Q
         best_Q = np.where(better, Q, best_Q)
