@@ -13,8 +13,12 @@ from .elasticity import (FreeBodySolver, element_strains, principal_strains, rea
                          rigid_modes, stiffness_matrix, strain_magnitude)
 from .errors import (BatchError, DeformClosureError, FingerError, GraspError, MeshError,
                      PartError, StiffnessError)
+from .grasp import (ContactGraph, GraspAnalysis, contact_graph, grasp_model, optimize_separation,
+                    pair_stiffness, release_energies, release_energy)
 from .mesh import Mesh, mesh_part, read_mesh, write_mesh
 from .part import Material, MeshOptions, Part, demo_part
+
+from .planning.plan import PlanResult, plan_grasps  # noqa: E402
 
 try:
     __version__ = version("deformclosure")
@@ -27,6 +31,8 @@ __all__ = [
     "Mesh", "mesh_part", "read_mesh", "write_mesh",
     "stiffness_matrix", "element_strains", "principal_strains", "strain_magnitude",
     "FreeBodySolver", "rigid_modes", "read_stiffness",
+    "pair_stiffness", "contact_graph", "ContactGraph", "release_energy", "release_energies",
+    "grasp_model", "optimize_separation", "GraspAnalysis", "plan_grasps", "PlanResult",
     "DeformClosureError", "PartError", "MeshError", "StiffnessError", "GraspError",
     "FingerError", "BatchError",
 ]
