@@ -42,6 +42,10 @@ __all__ = [
 #: Largest number of triangles a mesh request may ask for (area / max_area).
 MAX_TRIANGLES = 4_000_000
 
+#: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
+#: it, areas overflow and the geometry checks are meaningless.
+MAX_COORDINATE = 1e12
+
 
 # --------------------------------------------------------------------------- schema
 class _MaterialModel(BaseModel):
@@ -317,6 +321,10 @@ def _clean_ring(coords: list[list[float]], fld: str) -> np.ndarray:
     if not np.all(np.isfinite(ring)):
         bad = int(np.argwhere(~np.isfinite(ring))[0, 0])
         raise PartError(f"{fld}[{bad}]: coordinate is not finite (NaN or inf); give numbers")
+    if np.any(np.abs(ring) > MAX_COORDINATE):
+        bad = int(np.argwhere(np.abs(ring) > MAX_COORDINATE)[0, 0])
+        raise PartError(f"{fld}[{bad}]: coordinate is larger than {MAX_COORDINATE:g} in magnitude; "
+                        "check the units")
     if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
         ring = ring[:-1]
     keep = np.any(ring != np.roll(ring, 1, axis=0), axis=1) if len(ring) > 1 else np.ones(len(ring), bool)
@@ -370,15 +378,19 @@ def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
         if not (math.isfinite(m.max_area) and m.max_area > 0):
             raise PartError(f"mesh.max_area = {m.max_area!r}: must be a finite area > 0 in units²")
         max_area = m.max_area * scale**2
-        n_est = poly.area / max_area
+        n_est = poly.area / max_area if max_area > 0 else math.inf
         if n_est > MAX_TRIANGLES:
             raise PartError(f"mesh.max_area = {m.max_area!r}: would need about {n_est:.3g} triangles "
                             f"(limit {MAX_TRIANGLES:.0e}); increase max_area")
     if any(len(p) != 2 for p in m.points):
         raise PartError("mesh.points: every point must be a pair [x, y]")
-    pts = np.asarray(m.points, dtype=float).reshape(-1, 2) * scale
+    pts = np.asarray(m.points, dtype=float).reshape(-1, 2)
     if not np.all(np.isfinite(pts)):
         raise PartError("mesh.points: coordinate is not finite (NaN or inf); give numbers")
+    if np.any(np.abs(pts) > MAX_COORDINATE):
+        raise PartError(f"mesh.points: coordinate is larger than {MAX_COORDINATE:g} in magnitude; "
+                        "check the units")
+    pts = pts * scale
     if len(pts):
         tol = 1e-9 * float(np.ptp(outer, axis=0).max())
         inside = shapely.dwithin(shapely.points(pts), poly, tol)

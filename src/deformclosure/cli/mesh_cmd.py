@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import click
 
-from ..mesh import mesh_part, write_mesh
-from ..mesh.io import mesh_to_dict
+from ..errors import DeformClosureError
+from ..mesh import mesh_part, read_mesh, write_mesh
+from ..mesh.io import is_mesh_file, mesh_to_dict
 from ..part import Part
 from .common import write_json
 
@@ -23,21 +24,34 @@ __all__ = ["command"]
 @click.option("--plot", type=click.Path(dir_okay=False), help="Write a picture of the mesh (PNG/SVG).")
 def command(part: str, output: str | None, max_area: float | None, min_angle: float | None,
             plot: str | None) -> int:
-    """Mesh a part file with quality linear triangles."""
-    p = Part.from_file(part)
+    """Mesh a part file with quality linear triangles.
+
+    Given a mesh file instead (mesh JSON or any meshio format), check it and convert it.
+    """
+    from pathlib import Path
+
     from ..units import length_scale
 
-    s = length_scale(p.units)
-    mesh = mesh_part(p, max_area=None if max_area is None else max_area * s * s,
-                     min_angle=min_angle)
+    if Path(part).exists() and is_mesh_file(part):
+        if max_area is not None or min_angle is not None:
+            raise DeformClosureError("--max-area/--min-angle: apply to part files only, "
+                                     f"and {part} is a mesh file")
+        mesh = read_mesh(part)
+        units = "mm"
+    else:
+        p = Part.from_file(part)
+        s = length_scale(p.units)
+        mesh = mesh_part(p, max_area=None if max_area is None else max_area * s * s,
+                         min_angle=min_angle)
+        units = p.units
     click.echo(mesh.summary())
     if output:
-        if output.endswith(".json"):
+        if output == "-" or output.lower().endswith(".json"):
             write_json(mesh_to_dict(mesh), output)
         else:
             write_mesh(mesh, output)
     if plot:
         from ..plotting.mesh import save_mesh_plot
 
-        save_mesh_plot(mesh, plot, units=p.units)
+        save_mesh_plot(mesh, plot, units=units)
     return 0

@@ -12,7 +12,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import scipy.io
 import scipy.sparse as sp
 
 from ..errors import StiffnessError
@@ -65,17 +64,15 @@ def read_stiffness(path: str | Path, mesh) -> sp.csr_matrix:
     ------
     StiffnessError
     """
+    import scipy.io  # imported here: it costs a CLI start-up 0.1 s for a rare path
+
     path = Path(path)
     suffix = path.suffix.lower()
     try:
         if suffix in (".mtx", ".mm"):
             K = scipy.io.mmread(str(path))
         elif suffix in (".rb", ".rua", ".rsa", ".hb", ".hwb"):
-            K = scipy.io.hb_read(str(path))
-            # hb_read returns the stored triangle only for symmetric (RSA) files.
-            if suffix == ".rsa" or _hb_is_symmetric(path):
-                K = sp.csr_matrix(K)
-                K = K + K.T - sp.diags(K.diagonal())
+            K = _hb_read_any(path)
         else:
             raise StiffnessError(f"{path}: unknown stiffness format {suffix!r}; use .mtx (Matrix "
                                  "Market) or .rb/.rsa/.rua (Harwell-Boeing)")
@@ -86,7 +83,26 @@ def read_stiffness(path: str | Path, mesh) -> sp.csr_matrix:
     return check_stiffness(sp.csr_matrix(K), mesh.nodes)
 
 
-def _hb_is_symmetric(path: Path) -> bool:
-    with open(path) as fh:
-        lines = [fh.readline() for _ in range(3)]
-    return len(lines) >= 3 and lines[2][:3].upper() in ("RSA", "PSA")
+def _hb_read_any(path: Path) -> sp.csr_matrix:
+    """Read an assembled real Harwell-Boeing file, unsymmetric (RUA) or symmetric (RSA).
+
+    scipy's reader accepts RUA only; FEM codes usually write the stiffness as RSA (one
+    triangle stored). An RSA file is read as RUA and its stored triangle mirrored.
+    """
+    import io
+
+    import scipy.io
+
+    lines = path.read_text().splitlines(keepends=True)
+    if len(lines) < 3:
+        raise StiffnessError(f"{path}: not a Harwell-Boeing file (header too short)")
+    symmetric = lines[2][:3].upper() == "RSA"
+    if symmetric:
+        lines[2] = "RUA" + lines[2][3:]
+    K = sp.csr_matrix(scipy.io.hb_read(io.StringIO("".join(lines))))
+    if symmetric:
+        if sp.triu(K, 1).nnz and sp.tril(K, -1).nnz:
+            raise StiffnessError(f"{path}: symmetric (RSA) file stores entries on both sides "
+                                 "of the diagonal; store one triangle or write it as RUA")
+        K = (K + K.T - sp.diags(K.diagonal())).tocsr()
+    return K

@@ -69,8 +69,11 @@ class FreeBodySolver:
         self.free = np.flatnonzero(free)
         Kf = sp.csc_matrix(K)[self.free][:, self.free]
         try:
+            # K is symmetric positive definite once pinned: pivot on the diagonal
+            # (threshold 0). SuperLU's default partial pivoting swaps rows, which makes
+            # U's diagonal negative for valid meshes and breaks the definiteness test.
             self._lu = spla.splu(Kf.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                                 options={"SymmetricMode": True})
+                                 diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         except RuntimeError as err:
             raise StiffnessError(f"stiffness is singular beyond the 3 rigid modes ({err}); "
                                  "the mesh is disconnected or a mechanism") from None

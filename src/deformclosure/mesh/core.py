@@ -71,16 +71,16 @@ def boundary_loops(nodes: np.ndarray, triangles: np.ndarray) -> list[np.ndarray]
     is_bnd = ~np.isin(key, rkey)
     be = e[is_bnd]
     if len(be) == 0:
-        raise MeshError("mesh has no boundary; a planar part mesh must have one")
+        raise MeshError("triangles: mesh has no boundary; a planar part mesh must have one")
     starts, counts = np.unique(be[:, 0], return_counts=True)
     if np.any(counts > 1):
         bad = int(starts[counts > 1][0])
-        raise MeshError(f"mesh boundary touches itself at node {bad} (non-manifold vertex); "
-                        "remesh so that every boundary node has two boundary neighbours")
+        raise MeshError(f"triangles: mesh boundary touches itself at node {bad} (non-manifold "
+                        "vertex); remesh so that every boundary node has two boundary neighbours")
     succ = np.full(n, -1, dtype=np.int64)
     succ[be[:, 0]] = be[:, 1]
     if np.any(succ[be[:, 1]] < 0):
-        raise MeshError("mesh boundary is not closed; check for missing triangles")
+        raise MeshError("triangles: mesh boundary is not closed; check for missing triangles")
     # Cycles of the successor permutation restricted to boundary nodes.
     g = sp.coo_matrix((np.ones(len(be)), (be[:, 0], be[:, 1])), shape=(n, n))
     _, labels = connected_components(g, directed=True, connection="weak")
@@ -95,12 +95,12 @@ def boundary_loops(nodes: np.ndarray, triangles: np.ndarray) -> list[np.ndarray]
             order[i] = cur
             cur = succ[cur]
         if cur != start:
-            raise MeshError("mesh boundary is not a set of simple closed loops")
+            raise MeshError("triangles: mesh boundary is not a set of simple closed loops")
         loops.append(order)
     areas = [_ring_area(nodes[lp]) for lp in loops]
     outer = int(np.argmax(areas))
     if areas[outer] <= 0:
-        raise MeshError("mesh has no counter-clockwise outer boundary loop")
+        raise MeshError("triangles: mesh has no counter-clockwise outer boundary loop")
     holes = [lp for i, lp in enumerate(loops) if i != outer]
     holes.sort(key=lambda lp: int(lp.min()))
     return [loops[outer]] + holes
@@ -158,6 +158,10 @@ class Mesh:
         if not np.all(np.isfinite(nodes)):
             bad = int(np.argwhere(~np.isfinite(nodes))[0, 0])
             raise MeshError(f"nodes[{bad}]: coordinate is not finite; fix the mesh file")
+        if np.any(np.abs(nodes) > 1e12):
+            bad = int(np.argwhere(np.abs(nodes) > 1e12)[0, 0])
+            raise MeshError(f"nodes[{bad}]: coordinate is larger than 1e12 m in magnitude; "
+                            "check the units")
         if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
             raise MeshError(f"triangles: expected an (m, 3) array with m >= 1, got shape {tri.shape}")
         if not np.issubdtype(tri.dtype, np.integer):
@@ -195,15 +199,17 @@ class Mesh:
         und = np.sort(e, axis=1)
         _, counts = np.unique(und, axis=0, return_counts=True)
         if np.any(counts > 2):
-            raise MeshError("mesh has a non-manifold edge (shared by more than two triangles); remesh")
+            raise MeshError("triangles: mesh has a non-manifold edge (shared by more than two "
+                            "triangles); remesh")
         _, dcounts = np.unique(e, axis=0, return_counts=True)
         if np.any(dcounts > 1):
-            raise MeshError("mesh has overlapping triangles (an edge used twice in one direction); remesh")
+            raise MeshError("triangles: mesh has overlapping triangles (an edge used twice in one "
+                            "direction); remesh")
         adj = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
         ncomp, _ = connected_components(adj, directed=False)
         if ncomp != 1:
-            raise MeshError(f"mesh has {ncomp} separate pieces; a part must be one connected "
-                            "piece (mesh each piece as its own part)")
+            raise MeshError(f"triangles: mesh has {ncomp} separate pieces; a part must be one "
+                            "connected piece (mesh each piece as its own part)")
         loops = boundary_loops(nodes, tri)
         return cls(nodes, tri, tuple(loops), material, name)
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 import triangle as tr
 import shapely
-from scipy.spatial import cKDTree
 from shapely.geometry import Polygon
 
 from ..errors import MeshError, PartError
@@ -157,6 +156,8 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
         tris = remap[tris]
     mesh = Mesh.from_arrays(nodes, tris, material=part.material, name=part.name)
     if len(pts):
+        from scipy.spatial import cKDTree  # lazy: scipy.spatial is slow to import
+
         d, _ = cKDTree(mesh.nodes).query(pts)
         if np.any(d > tol * 10):
             raise MeshError("an inserted point did not become a mesh node; report this as a bug")

@@ -109,7 +109,9 @@ def mesh_from_dict(data: Any) -> Mesh:
         try:
             outer = np.asarray(b["outer"], dtype=np.int64)
             holes = [np.asarray(h, dtype=np.int64) for h in b.get("holes", [])]
-        except (KeyError, TypeError, ValueError):
+            if outer.ndim != 1 or any(h.ndim != 1 for h in holes):
+                raise ValueError
+        except (KeyError, TypeError, ValueError, OverflowError, AttributeError):
             raise MeshError("boundary: expected {\"outer\": [ids], \"holes\": [[ids], ...]}") from None
         if not _same_loop(mesh.outer_loop, outer):
             raise MeshError("boundary.outer: does not match the outer boundary of the triangles "
@@ -158,12 +160,20 @@ def read_mesh(path: str | Path, units: str = "m", material: Material | None = No
             raise MeshError(f"{path}: not valid JSON ({err.msg} at line {err.lineno}); fix the syntax") from None
         mesh = mesh_from_dict(data)
     else:
+        import contextlib
+        import io
+
         import meshio
 
+        # meshio prints its diagnostics and calls sys.exit(1) when no reader accepts a
+        # file: capture both so the user gets one line and our exit code.
+        buf = io.StringIO()
         try:
-            m = meshio.read(path)
-        except Exception as err:  # meshio raises many types for unreadable files
-            raise MeshError(f"{path}: meshio cannot read this file ({err})") from None
+            with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
+                m = meshio.read(path)
+        except (Exception, SystemExit) as err:  # meshio raises many types
+            detail = " ".join((buf.getvalue() or str(err)).split())[:300]
+            raise MeshError(f"{path}: meshio cannot read this file ({detail})") from None
         tris = [c.data for c in m.cells if c.type == "triangle"]
         if not tris:
             raise MeshError(f"{path}: contains no linear triangles ('triangle' cells)")
@@ -196,5 +206,10 @@ def write_mesh(mesh: Mesh, path: str | Path) -> None:
     else:
         import meshio
 
-        meshio.write_points_cells(path, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
-                                  [("triangle", mesh.triangles)])
+        try:
+            meshio.write_points_cells(path, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
+                                      [("triangle", mesh.triangles)])
+        except (Exception, SystemExit) as err:  # unknown suffix, unwritable path, ...
+            detail = " ".join(str(err).split())[:300]
+            raise MeshError(f"{path}: cannot write mesh file ({detail}); use .json or a "
+                            "suffix meshio knows (.vtk, .vtu, .msh, ...)") from None
