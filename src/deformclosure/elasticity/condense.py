@@ -114,20 +114,23 @@ class CondensedCompliance:
                                  "after removing the rigid modes")
         self._lu = lu
         nb = 2 * len(boundary) - int(np.isin(pins, _dofs(boundary)).sum())
-        L, U = lu.L, lu.U
-        S = _trailing_block(L, N - nb) @ _trailing_block(U, N - nb)
-        diag = np.diag(S)
-        if np.any(diag <= 0):
-            raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes")
-        # S is SPD: invert through Cholesky (scipy.linalg is LAPACK-backed).
+        # K is symmetric and factorised without pivoting, so U = D Lᵀ and the Schur
+        # complement is S = L₂₂ D₂₂ L₂₂ᵀ: its Cholesky factor is L₂₂ D₂₂^½, and LAPACK's
+        # potri inverts S from it directly (no dense product, no second factorisation).
+        L22 = _trailing_block(lu.L, N - nb)
+        d = _trailing_diagonal(lu.U, N - nb)
+        if np.any(d <= 0) or np.min(d) < 1e-13 * np.max(d):
+            raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes; "
+                                 "the mesh is disconnected or a mechanism")
         import scipy.linalg as sla
 
-        try:
-            cf = sla.cho_factor(0.5 * (S + S.T), lower=True, check_finite=False)
-        except np.linalg.LinAlgError:
+        R = np.asfortranarray(L22 * np.sqrt(d)[None, :])
+        Cl, info = sla.lapack.dpotri(R, lower=1, overwrite_c=1)
+        if info != 0:
             raise StiffnessError("condensed stiffness is not positive definite; K has more than "
-                                 "3 zero-energy modes") from None
-        Cb = sla.cho_solve(cf, np.eye(nb), check_finite=False)
+                                 "3 zero-energy modes")
+        Cb = np.tril(Cl)
+        Cb = Cb + np.tril(Cb, -1).T
         # Place into the full (2q x 2q) boundary compliance; pinned DOFs get zeros.
         bd = _dofs(boundary)
         keep = ~np.isin(bd, pins)
@@ -168,6 +171,19 @@ def pinned_dofs_among(nodes: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     sub = pinned_dofs(nodes[candidates])
     node = candidates[sub // 2]
     return 2 * node + sub % 2
+
+
+def _trailing_diagonal(M: sp.spmatrix, start: int) -> np.ndarray:
+    """``diag(M)[start:]`` of a CSC matrix."""
+    M = sp.csc_matrix(M)
+    N = M.shape[0]
+    lo = M.indptr[start]
+    rows = M.indices[lo:]
+    cols = np.repeat(np.arange(start, N), np.diff(M.indptr[start:]))
+    d = np.zeros(N - start)
+    on = rows == cols
+    d[rows[on] - start] = M.data[lo:][on]
+    return d
 
 
 def _trailing_block(M: sp.spmatrix, start: int) -> np.ndarray:
