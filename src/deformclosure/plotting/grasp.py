@@ -35,9 +35,12 @@ def plot_quality_curve(analysis, ax=None, units: str = "mm"):
     conv = lambda v: np.array([np.nan if x is None else x for x in v], float) * 1e3  # noqa: E731
     UA, UL, Q = conv(c["U_A"]), conv(c["U_L"]), conv(c["Q"])
     order = np.argsort(sig, kind="stable")
+    ax.plot(sig[order], Q[order], label="$Q = \\min(U_A, U_L)$", color="0.6", lw=5, alpha=0.6)
     ax.plot(sig[order], UA[order], label="$U_A$ (release energy)", color="C0", lw=1.2)
     ax.plot(sig[order], UL[order], label="$U_L$ (to elastic limit)", color="C1", lw=1.2)
-    ax.plot(sig[order], Q[order], label="$Q = \\min(U_A, U_L)$", color="k", lw=2, alpha=0.6)
+    finite = np.isfinite(UA)
+    if finite.any() and np.nanmax(UA[finite]) < 0.2 * np.nanmax(UL):
+        ax.set_yscale("symlog", linthresh=max(np.nanmax(UA[finite]) / 10, 1e-12))
     sep = analysis.separation
     if sep.sigma_star is not None:
         ax.axvline(sep.sigma_star * s, color="C3", ls="--", lw=1)
