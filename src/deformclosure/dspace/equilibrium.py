@@ -1,0 +1,579 @@
+"""Frictionless contact equilibrium of a free deformable part between fixed fingers
+(paper §3.3, SPEC §3).
+
+The part is free to translate and rotate; the fingers are fixed. The equilibrium is a
+local minimum of the linear elastic energy ``U = 1/2 X^T K X`` in ``D_free``:
+
+    minimise 1/2 X^T K X  subject to  gap_r(q(X)) >= 0  for every contact condition r.
+
+Model (small-displacement theory, like the paper's ``K``)
+---------------------------------------------------------
+* ``X`` is the nodal displacement including the rigid motion (``K`` ignores it). The
+  configuration ``q(X)`` applies the *mass-weighted rigid part* of ``X`` as an exact
+  finite rotation + translation and the rest as deformation, so a turning part does
+  not swell (a linearised rotation would stretch it).
+* Contact conditions are node-to-surface (:func:`.obstacles.contact_rows`): part nodes
+  against finger bodies, finger corners against part edges, discs against edges. Their
+  force directions (finger normals at the rigidly placed nodes, part-edge normals at
+  rest), the material points carrying them on edges (foot points at rest) and the
+  moment arms are taken on the rest geometry placed by the part's rigid motion, so the
+  contact forces balance exactly, in sum and in moment.
+
+Method
+------
+Sequential linearisation: at the current configuration the gaps are linearised and the
+convex QP is solved *in its dual*, whose size is the number of contact conditions:
+
+    minimise 1/2 lam^T W lam + g~^T lam   s.t.  lam >= 0,  B lam = 0,
+
+with ``W = C G C^T`` the contact compliance (``G``: compliance of the perimeter DOFs by
+static condensation, :class:`deformclosure.elasticity.condense.CondensedCompliance`, one
+factorisation), ``g~`` the gaps at ``X = 0`` and ``B lam = 0`` the force and moment
+balance. The QP is solved with Clarabel (through qpsolvers), *polished* on its active
+set (exact complementarity), and the rigid motion is the smallest one keeping every gap
+non-negative (a trust region of 5 % of the diameter per step lets a squeezed-out part
+leave gradually). Gaps are re-linearised until the step is below ``1e-9`` x the
+diameter (or ``1e-6`` x the largest elastic displacement); the rigid placement used for
+the force directions is iterated to a fixed point with Aitken relaxation. ``lam`` are
+the contact forces (N).
+
+Limits: equilibria that need a large rigid rotation (several degrees) to balance converge
+slowly and may stop at the iteration budget (``converged=False``); the forces still
+balance. Like any node-to-surface scheme, part edges between two contact nodes may cut
+a curved finger by up to ``l^2 / (8 r)`` (edge length ``l``, radius ``r``).
+
+References
+----------
+K. Gopalakrishnan and K. Goldberg, IJRR 24(11), 2005, §3.3 (equilibrium, deform closure).
+P. Wriggers, *Computational Contact Mechanics*, 2nd ed., Springer 2006 (frictionless
+node-to-surface contact, dual formulation).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import DeformClosureError
+from .fingers import Finger
+from .obstacles import BoundaryModel, ContactRows, contact_rows, merge_rows, refresh_rows, touch_tolerance
+
+__all__ = ["EquilibriumResult", "equilibrium", "area_centroid"]
+
+_J = np.array([[0.0, -1.0], [1.0, 0.0]])
+UNITS = {"length": "m", "energy": "J", "force": "N", "moment": "N*m", "angle": "rad"}
+
+
+def area_centroid(triangles: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Area centroid (m) of the triangulated region in configuration ``x (n, 2)``."""
+    p = x[np.asarray(triangles)]
+    d1, d2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    A = 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+    return (A[:, None] * p.mean(axis=1)).sum(axis=0) / A.sum()
+
+
+def _rot(theta: float) -> np.ndarray:
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+@dataclass(frozen=True)
+class EquilibriumResult:
+    """Frictionless contact equilibrium of a free part (paper §3.3).
+
+    Attributes
+    ----------
+    q : ndarray (n, 2)
+        Equilibrium configuration (m).
+    displacement : ndarray (n, 2)
+        ``X`` (m): its elastic part gives the energy; its mass-weighted rigid part is
+        applied exactly in ``q``.
+    rotation : float
+        Mean rigid rotation of the part (rad).
+    translation : ndarray (2,)
+        Displacement of the area centroid (m).
+    forces : ndarray (n_fingers, 2)
+        Force each finger exerts on the part (N).
+    moments : ndarray (n_fingers,)
+        Moment of each finger's force about the rest area centroid, with the rest-geometry
+        arms of the small-displacement model (N m); they sum to zero.
+    points : ndarray (n_fingers, 2)
+        Point of application of each finger's resultant in ``q`` (centre of its contact
+        forces; the nearest contact point when the force is zero) (m).
+    nodal_forces : ndarray (n, 2)
+        Contact forces on the nodes (N).
+    gaps : ndarray (n_fingers,)
+        Smallest gap of each finger at the equilibrium, node-to-surface (m; ``inf`` if
+        out of reach).
+    active : ndarray (n_fingers,) of bool
+        Finger touches the part (gap within ``tol``) or pushes on it.
+    energy : float
+        Linear elastic energy ``1/2 X^T K X`` (J).
+    centroid : ndarray (2,)
+        Area centroid of the equilibrium configuration (m).
+    iterations : int
+        Number of linearised QPs solved.
+    converged : bool
+        Steps and rigid placement settled (see module notes) and no penetration.
+    tol : float
+        Touching tolerance used (m).
+    rows : ContactRows
+        The final linearised contact conditions, ``multipliers`` their forces (N).
+    """
+
+    q: np.ndarray
+    displacement: np.ndarray
+    rotation: float
+    translation: np.ndarray
+    forces: np.ndarray
+    moments: np.ndarray
+    points: np.ndarray
+    nodal_forces: np.ndarray
+    gaps: np.ndarray
+    active: np.ndarray
+    energy: float
+    centroid: np.ndarray
+    iterations: int
+    converged: bool
+    tol: float
+    rows: ContactRows = field(repr=False)
+    multipliers: np.ndarray = field(repr=False)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (SI units)."""
+        return {
+            "energy": float(self.energy),
+            "energy_kind": "linear",
+            "iterations": int(self.iterations),
+            "converged": bool(self.converged),
+            "rotation": float(self.rotation),
+            "translation": [float(v) for v in self.translation],
+            "forces": self.forces.tolist(),
+            "moments": self.moments.tolist(),
+            "points": self.points.tolist(),
+            "gaps": [None if not np.isfinite(g) else float(g) for g in self.gaps],
+            "active": [bool(a) for a in self.active],
+            "units": dict(UNITS),
+        }
+
+
+class _Compliance:
+    """Compliance of the perimeter DOFs (static condensation, one factorisation).
+
+    Uses :class:`deformclosure.elasticity.condense.CondensedCompliance`: the Schur
+    complement of ``K`` on the perimeter nodes with 3 DOFs pinned, inverted densely.
+    Every contact condition involves perimeter nodes only, so ``W = C G C^T`` needs no
+    solve with many right-hand sides; one solve per iteration gives the full field.
+    """
+
+    def __init__(self, K: Any, mesh: Any):
+        from ..elasticity.condense import CondensedCompliance
+
+        self.cc = CondensedCompliance(K, np.asarray(mesh.nodes, float), np.asarray(mesh.triangles),
+                                      np.asarray(mesh.perimeter_nodes, dtype=np.int64))
+
+    def block(self, S: np.ndarray) -> np.ndarray:
+        """Compliance ``(2k, 2k)`` (m/N) of the DOFs ``[x, y]`` of perimeter nodes ``S``."""
+        pos = self.cc.position(S)
+        d = np.ravel(np.c_[2 * pos, 2 * pos + 1])
+        G = self.cc.C[np.ix_(d, d)]
+        return 0.5 * (G + G.T)
+
+    def solve(self, f: np.ndarray) -> np.ndarray:
+        """Displacement (m) for a self-equilibrated load ``f (2n,)`` (N), pinned gauge."""
+        return self.cc.solve(f)
+
+
+def _solve_dual(W: np.ndarray, g: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Clarabel on ``min 1/2 l^T W l + g^T l, l >= 0, B l = 0``; returns ``(l, y)``."""
+    import scipy.sparse as sp
+    from qpsolvers import Problem, solve_problem
+
+    r = len(g)
+    P = sp.csc_matrix(0.5 * (W + W.T) + 1e-14 * np.trace(W) / max(r, 1) * np.eye(r))
+    prob = Problem(P, g, -sp.eye(r, format="csc"), np.zeros(r), sp.csc_matrix(B) if len(B) else None,
+                   np.zeros(len(B)) if len(B) else None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = solve_problem(prob, solver="clarabel", tol_gap_abs=1e-11, tol_gap_rel=1e-11, tol_feas=1e-11,
+                            max_iter=200)
+    if sol.x is None or not np.all(np.isfinite(sol.x)):
+        raise DeformClosureError("the contact problem could not be solved (Clarabel failed); "
+                                 "check the finger placement")
+    lam = np.maximum(np.asarray(sol.x), 0.0)
+    y = np.asarray(sol.y) if sol.y is not None and len(B) else np.zeros(len(B))
+    return lam, y
+
+
+def _min_norm_rigid(y0: np.ndarray, N: np.ndarray, Mi: np.ndarray, zi: np.ndarray,
+                    slack: float = 1e-10) -> np.ndarray:
+    """``min |y0 + N eta|`` subject to ``zi + Mi (y0 + N eta) >= 0`` (a tiny QP).
+
+    Gaps down to ``-slack`` (scaled by the part's diameter) count as satisfied, so
+    round-off in touching contacts does not move the part.
+    """
+    if N.shape[1] == 0:
+        return y0
+    y = y0 - N @ np.linalg.lstsq(N, y0, rcond=None)[0]  # unconstrained minimum
+    if len(zi) == 0 or np.all(zi + Mi @ y >= -slack):
+        return y
+    import scipy.sparse as sp
+    from qpsolvers import Problem, solve_problem
+
+    k = N.shape[1]
+    MN = Mi @ N
+    h = zi + Mi @ y0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = solve_problem(Problem(sp.csc_matrix(N.T @ N + 1e-12 * np.eye(k)), N.T @ y0, sp.csc_matrix(-MN), h),
+                            solver="clarabel", tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12)
+    if sol.x is None:
+        return y0
+    eta = np.asarray(sol.x)
+    # exact on the binding constraints (least-norm solution of the equalities)
+    z = np.asarray(sol.z) if sol.z is not None else np.zeros(len(h))
+    act = np.flatnonzero(z > 1e-9 * max(float(z.max(initial=0.0)), 1e-300))
+    if len(act):
+        KKT = np.block([[N.T @ N, MN[act].T], [MN[act], np.zeros((len(act), len(act)))]])
+        rhs = np.r_[-N.T @ y0, -h[act]]
+        sol2 = np.linalg.lstsq(KKT, rhs, rcond=1e-13)[0]
+        eta2 = sol2[:k]
+        if np.all(h + MN @ eta2 >= -slack):
+            eta = eta2
+    return y0 + N @ eta
+
+
+def _polish(W: np.ndarray, g: np.ndarray, B: np.ndarray, lam: np.ndarray, y: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Exact complementarity on the active set of a dual QP solution.
+
+    Rows are active where the multiplier exceeds the slack (interior-point solutions
+    separate the two). The equality-constrained KKT system on the active set is solved
+    by least squares; rows with a negative multiplier are released one at a time.
+
+    Returns
+    -------
+    lam, y : the polished multipliers,
+    N : basis of the rigid multipliers that leave every active gap unchanged,
+    active : bool mask of the active rows.
+    """
+    r, m = len(g), len(B)
+    slack = W @ lam + g + (B.T @ y if m else 0.0)
+    active = lam > np.maximum(slack, 1e-13)
+    lam_p = np.zeros(r)
+    y_p = np.zeros(m)
+    for _ in range(r + 1):
+        A = np.flatnonzero(active)
+        lam_p = np.zeros(r)
+        if len(A) == 0:
+            y_p = np.zeros(m)
+            break
+        KKT = np.block([[W[np.ix_(A, A)], B[:, A].T], [B[:, A], np.zeros((m, m))]])
+        rhs = np.r_[-g[A], np.zeros(m)]
+        sol = np.linalg.lstsq(KKT, rhs, rcond=1e-13)[0]
+        lam_p[A] = sol[: len(A)]
+        y_p = sol[len(A):]
+        worst = int(np.argmin(lam_p[A]))
+        if lam_p[A][worst] >= -1e-13:
+            lam_p = np.maximum(lam_p, 0.0)
+            break
+        active[A[worst]] = False
+    A = np.flatnonzero(active)
+    if m and len(A):
+        _, S, Vt = np.linalg.svd(B[:, A].T, full_matrices=True)
+        rank = int(np.sum(S > 1e-10 * max(S.max(initial=0.0), 1e-300)))
+        N = Vt[rank:].T
+    else:
+        N = np.eye(m)
+    return lam_p, y_p, N, active
+
+
+class _RigidFit:
+    """Mass-weighted rigid part of a displacement field (consistent CST mass matrix).
+
+    ``coords(X)`` returns ``(tx, ty, L theta)``: the displacement of the area centroid
+    and the mean rotation, i.e. the rigid motion closest to ``X`` in the continuum
+    ``L2`` norm (exact for piecewise-linear fields, so a uniform strain of a symmetric
+    part has zero rotation whatever the mesh).
+    """
+
+    def __init__(self, x0: np.ndarray, triangles: np.ndarray, C0: np.ndarray, L: float):
+        import scipy.sparse as sp
+
+        tri = np.asarray(triangles)
+        p = x0[tri]
+        A = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                         - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
+        local = (np.ones((3, 3)) + np.eye(3)) / 12.0
+        rows = np.repeat(tri, 3, axis=1).ravel()
+        cols = np.tile(tri, (1, 3)).ravel()
+        vals = (A[:, None, None] * local[None]).ravel()
+        n = len(x0)
+        self.M = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+        self.x0, self.C0, self.L = x0, C0, L
+        self.R0 = np.zeros((2 * n, 3))
+        self.R0[0::2, 0] = 1.0
+        self.R0[1::2, 1] = 1.0
+        self.R0[0::2, 2] = -(x0[:, 1] - C0[1]) / L
+        self.R0[1::2, 2] = (x0[:, 0] - C0[0]) / L
+        MR = self._M(self.R0)
+        self.G = self.R0.T @ MR
+
+    def _M(self, V: np.ndarray) -> np.ndarray:
+        """Apply the (2n x 2n) vector mass matrix to columns of ``V (2n, k)``."""
+        out = np.empty_like(V)
+        out[0::2] = self.M @ V[0::2]
+        out[1::2] = self.M @ V[1::2]
+        return out
+
+    def coords(self, X: np.ndarray) -> np.ndarray:
+        v = np.asarray(X, float).reshape(-1, 1)
+        return np.linalg.solve(self.G, self.R0.T @ self._M(v))[:, 0]
+
+    def placed(self, X: np.ndarray, rigid: np.ndarray | None = None) -> np.ndarray:
+        """Configuration of displacement ``X``: its rigid part applied as an exact
+        (finite) rotation and translation, the rest as deformation.
+
+        Linear elasticity sees only ``X`` (rigid modes cost nothing either way); the
+        geometry uses the exact rotation, so a rotating part does not swell. With
+        ``rigid = (tx, ty, L theta)`` given, the rest geometry placed by that rigid
+        motion only.
+        """
+        if rigid is not None:
+            c = np.asarray(rigid, float)
+            return (self.x0 - self.C0) @ _rot(c[2] / self.L).T + self.C0 + c[:2]
+        c = self.coords(X)
+        Xd = X - (self.R0 @ c).reshape(X.shape)
+        return (self.x0 - self.C0 + Xd) @ _rot(c[2] / self.L).T + self.C0 + c[:2]
+
+
+def equilibrium(
+    mesh: Any,
+    fingers: Sequence[Finger],
+    *,
+    stiffness: Any = None,
+    tol: float | None = None,
+    max_iter: int = 50,
+    search_radius: float | None = None,
+) -> EquilibriumResult:
+    """Frictionless contact equilibrium of the free part between fixed fingers.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The part's mesh (rest configuration, metres) with its material.
+    fingers : sequence of Finger
+        Fixed fingers, placed against the part at rest (touching, or overlapping it to
+        pre-squeeze it).
+    stiffness : sparse matrix (2n, 2n), optional
+        Stiffness ``K`` (N/m); assembled from the mesh when omitted.
+    tol : float, optional
+        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter``.
+    max_iter : int
+        Maximum number of re-linearisations.
+    search_radius : float, optional
+        Contact conditions are linearised for gaps below this (m); default
+        ``max(0.02 L, 3 x deepest penetration)`` with ``L`` the diameter.
+
+    Returns
+    -------
+    EquilibriumResult
+        Configuration, contact force per finger (N), energy (J, linear), iterations.
+
+    Notes
+    -----
+    Small-displacement theory, like the paper's ``U = 1/2 X^T K X`` (see the module
+    docstring): the rigid part of ``X`` is applied exactly, force directions and arms
+    are those of the rest geometry placed by the rigid motion, and the contact forces
+    balance exactly (sum and moment). When the fingers cannot hold the part against its
+    own pre-squeeze, the part is pushed out by the smallest rigid motion and the
+    equilibrium has zero energy. Check ``converged``.
+
+    References
+    ----------
+    Gopalakrishnan & Goldberg (2005), §3.3.
+    """
+    fingers = list(fingers)
+    x0 = np.asarray(mesh.nodes, dtype=float)
+    n = len(x0)
+    L = float(mesh.diameter)
+    tol = touch_tolerance(mesh) if tol is None else float(tol)
+    if stiffness is None:
+        from ..elasticity.stiffness import stiffness_matrix
+
+        stiffness = stiffness_matrix(mesh)
+    K = stiffness
+    mat = getattr(mesh, "material", None)
+    if mat is not None:
+        F0 = float(mat.youngs_modulus * mat.thickness * L)
+    else:
+        F0 = float(np.abs(K.diagonal()).mean() * L)
+    bd = BoundaryModel(mesh)
+    C0 = area_centroid(mesh.triangles, x0)
+
+    X = np.zeros((n, 2))
+    comp: _Compliance | None = None
+    fit = _RigidFit(x0, mesh.triangles, C0, L)
+    R0 = fit.R0  # rigid modes: translations (per m) and rotation (per L rad)
+    state: dict = {"comp": None, "rows": contact_rows(bd, x0, fingers, radius=0.0), "its": 0}
+
+    def _accuracy(X: np.ndarray) -> float:
+        """Convergence threshold (m): 1e-9 x diameter, or 1e-6 x the largest displacement
+        (elastic part) when that is larger."""
+        Xd = X - (R0 @ fit.coords(X)).reshape(X.shape)
+        return max(1e-9 * L, 1e-6 * float(np.abs(Xd).max(initial=0.0)))
+
+    def inner(X: np.ndarray, ref_rigid: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Sequential linearised QPs with the reference placement fixed: material points
+        and finger normals are taken on the rest geometry placed by ``ref_rigid``; part
+        edge normals, moment arms and rigid modes are those of the rest geometry."""
+        xr = fit.placed(X, rigid=ref_rigid)
+        lam = np.zeros(0)
+        for k in range(budget):
+            state["its"] += 1
+            x = fit.placed(X)
+            if search_radius is None:
+                probe = contact_rows(bd, x, fingers, radius=0.02 * L, x_ref=xr, normals_ref=x0, feet_ref=x0)
+                pen = max(0.0, -float(probe.gap.min(initial=0.0)))
+                radius = max(0.02 * L, 3.0 * pen)
+                new = probe if radius == 0.02 * L else contact_rows(bd, x, fingers, radius=radius, x_ref=xr,
+                                                                    normals_ref=x0, feet_ref=x0)
+            else:
+                new = contact_rows(bd, x, fingers, radius=float(search_radius), x_ref=xr, normals_ref=x0,
+                                   feet_ref=x0)
+            # rows once linearised stay (re-measured): the set does not flip-flop
+            rows = merge_rows(new, refresh_rows(state["rows"], bd, x, fingers)) if k > 0 else new
+            state["rows"] = rows
+            r = len(rows)
+            if r == 0:
+                return X, np.zeros(0), True
+            if state["comp"] is None:
+                state["comp"] = _Compliance(K, mesh)
+            comp = state["comp"]
+            S = np.unique(rows.nodes)
+            col = {int(v): i for i, v in enumerate(S)}
+            loc = np.vectorize(col.__getitem__, otypes=[np.int64])(rows.nodes)  # (r, 2)
+            C = np.zeros((r, 2 * len(S)))  # gradient of each gap w.r.t. the DOFs of S
+            ridx = np.arange(r)
+            for jj in range(2):
+                np.add.at(C, (ridx, 2 * loc[:, jj]), rows.weights[:, jj] * rows.direction[:, 0])
+                np.add.at(C, (ridx, 2 * loc[:, jj] + 1), rows.weights[:, jj] * rows.direction[:, 1])
+            W = C @ comp.block(S) @ C.T  # contact compliance (m/N)
+            gt = rows.gap - C @ X[S].ravel()  # linearised gaps at X = 0
+            # force and moment balance on the rest geometry (rows of B), moment scaled by L
+            p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
+            arm = p0 - C0
+            d = rows.direction
+            Bfull = np.vstack([d[:, 0], d[:, 1], (arm[:, 0] * d[:, 1] - arm[:, 1] * d[:, 0]) / L])
+            U_, s_, _ = np.linalg.svd(Bfull, full_matrices=False)
+            keep = s_ > 1e-10 * max(s_.max(initial=0.0), 1e-300)
+            Ur = U_[:, keep]
+            B = Ur.T @ Bfull
+            Ws, gs = W * F0 / L, gt / L
+            lam_s, y = _solve_dual(Ws, gs, B)
+            lam_s, y, N, act = _polish(Ws, gs, B, lam_s, y)
+            lam = lam_s * F0
+            f = np.zeros(2 * n)
+            np.add.at(f, np.ravel(np.c_[2 * S, 2 * S + 1]), C.T @ lam)
+            X_el = comp.solve(f).reshape(n, 2)
+            # rigid motion: y fixes it on the span of the active rows; on the free
+            # directions take the smallest total rigid motion that keeps every gap >= 0
+            c_rig = fit.coords(X_el) / L  # (tx, ty, L theta) / L
+            cs = Ur.T @ c_rig
+            ina = np.flatnonzero(~act)
+            Mi = B[:, ina].T
+            zi = (Ws @ lam_s + gs)[ina]
+            if len(B):
+                y = _min_norm_rigid(y + cs, N, Mi, zi - Mi @ cs) - cs
+            alpha = (Ur @ y - (c_rig - Ur @ cs)) * L  # (tx, ty, L theta) in m
+            X_new = X_el + (R0 @ alpha).reshape(n, 2)
+            # trust region on the rigid motion: at most 5 % of the diameter (or 0.05 rad)
+            # per linearisation, so a part squeezed out moves out gradually
+            dc = fit.coords(X_new) - fit.coords(X)
+            big = float(np.abs(dc).max())
+            if big > 0.05 * L:
+                X_new = X_new - (R0 @ (dc * (1.0 - 0.05 * L / big))).reshape(n, 2)
+            step = float(np.abs(fit.placed(X_new) - x).max())
+            X = X_new
+            if step <= _accuracy(X):
+                return X, lam, True
+        return X, lam, False
+
+    # The finger normals at the nodes follow the part's rigid placement r (the finger
+    # surface under a node moves when the part turns): r is a fixed point, r = rigid part
+    # of the solution computed with reference r, found by relaxed iteration with Aitken's
+    # adaptive relaxation factor (Irons-Tuck), interleaved with the inner iterations.
+    X = np.zeros((n, 2))
+    r = np.zeros(3)
+    omega = 0.5
+    F_prev = None
+    converged = False
+    for _ in range(max_iter):
+        X, lam, ok = inner(X, r, 8)
+        F = fit.coords(X) - r
+        if ok and np.abs(F).max() <= _accuracy(X):
+            converged = True
+            break
+        if state["its"] >= 4 * max_iter:
+            break
+        if F_prev is not None:
+            dF = F - F_prev
+            den = float(dF @ dF)
+            if den > 0:
+                omega = float(np.clip(-omega * float(F_prev @ dF) / den, 0.05, 1.5))
+        r = r + omega * F
+        F_prev = F
+    it = state["its"]
+    rows = state["rows"]
+    x = fit.placed(X)
+
+    # final quantities
+    nf = len(fingers)
+    forces = np.zeros((nf, 2))
+    moments = np.zeros(nf)
+    nodal = np.zeros((n, 2))
+    points = np.full((nf, 2), np.nan)
+    # gaps in the contact model of the solve (node-to-surface: part nodes against the
+    # finger bodies, finger corners against part edges, material points fixed at rest)
+    final_rows = merge_rows(contact_rows(bd, x, fingers, radius=max(0.02 * L, 10 * tol),
+                                         x_ref=fit.placed(X, rigid=fit.coords(X)), normals_ref=x0,
+                                         feet_ref=x0),
+                            refresh_rows(rows, bd, x, fingers))
+    gaps = np.full(nf, np.inf)
+    np.minimum.at(gaps, final_rows.finger, final_rows.gap)
+    if len(lam):
+        fr = lam[:, None] * rows.direction
+        np.add.at(forces, rows.finger, fr)
+        for j in range(2):
+            np.add.at(nodal, rows.nodes[:, j], rows.weights[:, j, None] * fr)
+        p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
+        arm = p0 - C0
+        np.add.at(moments, rows.finger, arm[:, 0] * fr[:, 1] - arm[:, 1] * fr[:, 0])
+        pts = (rows.weights[:, :, None] * x[rows.nodes]).sum(axis=1)
+        wsum = np.zeros(nf)
+        np.add.at(wsum, rows.finger, lam)
+        psum = np.zeros((nf, 2))
+        np.add.at(psum, rows.finger, lam[:, None] * pts)
+        has = wsum > 0
+        points[has] = psum[has] / wsum[has, None]
+    for i in range(nf):
+        if np.isnan(points[i, 0]):
+            sel = np.flatnonzero(final_rows.finger == i)
+            if len(sel):
+                points[i] = final_rows.point[sel[np.argmin(final_rows.gap[sel])]]
+    pushing = np.linalg.norm(forces, axis=1) > 0
+    active = (gaps <= tol) | pushing
+    Xf = X.ravel()
+    energy = max(0.0, 0.5 * float(Xf @ (K @ Xf)))
+    if np.isfinite(gaps).any() and gaps[np.isfinite(gaps)].min() < -max(tol, _accuracy(X)):
+        converged = False
+    rig = fit.coords(X)  # (tx, ty, L theta): mean rigid motion
+    return EquilibriumResult(
+        q=x, displacement=X, rotation=float(rig[2] / L), translation=rig[:2].copy(), forces=forces,
+        moments=moments, points=points, nodal_forces=nodal, gaps=gaps, active=active, energy=energy,
+        centroid=area_centroid(mesh.triangles, x), iterations=it, converged=converged, tol=tol, rows=rows,
+        multipliers=lam,
+    )

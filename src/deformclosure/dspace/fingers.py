@@ -1,0 +1,532 @@
+"""Rigid finger bodies and the finger file (paper §3.2, SPEC §2 and §5).
+
+A *finger* is a rigid body held fixed in the plane: a point, a disc, a convex polygon
+or a half-plane. Every finger is a frozen dataclass in SI units (metres) with a few
+vectorised geometric queries used by the D-obstacle tests (:mod:`.obstacles`), the
+contact problem (:mod:`.equilibrium`) and the closure test (:mod:`.closure`).
+
+Finger file
+-----------
+A JSON object with the length ``units`` (``"m"``, ``"mm"``, ``"cm"`` or ``"in"``) and a
+non-empty list ``fingers``; every entry has a ``type`` and that type's fields only::
+
+    {"units": "mm",
+     "fingers": [
+        {"type": "point",     "at": [x, y]},
+        {"type": "disc",      "center": [x, y], "radius": r},
+        {"type": "polygon",   "vertices": [[x, y], [x, y], [x, y], ...]},
+        {"type": "halfplane", "point": [x, y], "normal": [nx, ny]}]}
+
+A half-plane finger occupies the side its normal points *away* from,
+``{x : (x - point) . normal <= 0}``; the normal points towards the part. Polygon
+vertices may be given in either orientation (they are stored counter-clockwise) and
+must form a convex polygon of positive area. Unknown fields, unknown types, non-finite
+numbers, a non-positive radius, a zero normal or a non-convex polygon raise
+:class:`deformclosure.errors.FingerError` with a one-line message that names the field
+and says how to fix it.
+
+References
+----------
+K. Gopalakrishnan and K. Goldberg, "D-Space and Deform Closure Grasps of Deformable
+Parts", IJRR 24(11), 2005, §3.2 (fingers and D-obstacles).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, ClassVar, Literal, Sequence, Union
+
+import numpy as np
+
+from ..errors import FingerError
+from ..units import LENGTH_UNITS
+
+__all__ = [
+    "Finger",
+    "PointFinger",
+    "DiscFinger",
+    "PolygonFinger",
+    "HalfPlaneFinger",
+    "FINGER_TYPES",
+    "load_fingers",
+    "fingers_from_dict",
+    "fingers_to_dict",
+    "write_fingers",
+]
+
+_J = np.array([[0.0, -1.0], [1.0, 0.0]])  # rotation by +90 degrees
+
+
+def _as_points(points: Any) -> np.ndarray:
+    p = np.asarray(points, dtype=float)
+    if p.shape[-1:] != (2,):
+        raise ValueError(f"points must have shape (..., 2), got {p.shape}")
+    return p
+
+
+class Finger:
+    """Base class of the rigid finger bodies (all lengths in metres).
+
+    Subclasses provide vectorised geometric queries on arrays of points of shape
+    ``(..., 2)``:
+
+    * :meth:`signed_distance` -- distance from the finger body, negative inside
+      (for a point finger: the distance to the point, never negative);
+    * :meth:`outward_normal` -- unit gradient of the signed distance (pointing from
+      the finger towards the query point);
+    * :attr:`vertices` -- the corners of the body, ``(k, 2)`` (the point itself for a
+      point finger, none for discs and half-planes);
+    * :attr:`radius` -- radius of curvature of the smooth part of the boundary
+      (``0`` for a point, ``r`` for a disc, ``inf`` for flat faces).
+    """
+
+    type: ClassVar[str] = ""
+    radius_of_curvature: ClassVar[float] = math.inf
+
+    @property
+    def vertices(self) -> np.ndarray:  # pragma: no cover - overridden
+        return np.zeros((0, 2))
+
+    @property
+    def has_interior(self) -> bool:
+        """Whether the body has a non-empty interior (all fingers but the point)."""
+        return True
+
+    def signed_distance(self, points: Any) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def outward_normal(self, points: Any) -> np.ndarray:  # pragma: no cover
+        raise NotImplementedError
+
+    def probe_point(self) -> np.ndarray | None:
+        """A point in the interior of the body (``None`` for a half-plane)."""
+        return None
+
+    def to_dict(self, scale: float = 1.0) -> dict:  # pragma: no cover
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class PointFinger(Finger):
+    """A point finger at ``at`` (m). Its body has no interior: the part collides with
+    it when the point lies strictly inside the part."""
+
+    at: tuple[float, float]
+    type: ClassVar[str] = "point"
+    radius_of_curvature: ClassVar[float] = 0.0
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return np.array([self.at], dtype=float)
+
+    @property
+    def has_interior(self) -> bool:
+        return False
+
+    def signed_distance(self, points: Any) -> np.ndarray:
+        return np.linalg.norm(_as_points(points) - np.asarray(self.at), axis=-1)
+
+    def outward_normal(self, points: Any) -> np.ndarray:
+        d = _as_points(points) - np.asarray(self.at)
+        n = np.linalg.norm(d, axis=-1, keepdims=True)
+        return np.divide(d, n, out=np.zeros_like(d), where=n > 0)
+
+    def probe_point(self) -> np.ndarray:
+        return np.asarray(self.at, dtype=float)
+
+    def to_dict(self, scale: float = 1.0) -> dict:
+        return {"type": "point", "at": [self.at[0] / scale, self.at[1] / scale]}
+
+
+@dataclass(frozen=True)
+class DiscFinger(Finger):
+    """A disc finger with ``center`` (m) and ``radius`` (m)."""
+
+    center: tuple[float, float]
+    radius: float
+    type: ClassVar[str] = "disc"
+
+    @property
+    def radius_of_curvature(self) -> float:  # type: ignore[override]
+        return float(self.radius)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return np.zeros((0, 2))
+
+    def signed_distance(self, points: Any) -> np.ndarray:
+        return np.linalg.norm(_as_points(points) - np.asarray(self.center), axis=-1) - self.radius
+
+    def outward_normal(self, points: Any) -> np.ndarray:
+        d = _as_points(points) - np.asarray(self.center)
+        n = np.linalg.norm(d, axis=-1, keepdims=True)
+        out = np.divide(d, n, out=np.zeros_like(d), where=n > 0)
+        out[..., 0] = np.where(n[..., 0] > 0, out[..., 0], 1.0)
+        return out
+
+    def probe_point(self) -> np.ndarray:
+        return np.asarray(self.center, dtype=float)
+
+    def to_dict(self, scale: float = 1.0) -> dict:
+        return {
+            "type": "disc",
+            "center": [self.center[0] / scale, self.center[1] / scale],
+            "radius": self.radius / scale,
+        }
+
+
+@dataclass(frozen=True)
+class PolygonFinger(Finger):
+    """A convex polygon finger; ``vertices`` (m) counter-clockwise, no repeated vertex.
+
+    The body is ``{x : m_j . x <= h_j}`` with outward unit edge normals ``m_j``
+    (:attr:`normals`) and offsets ``h_j`` (:attr:`offsets`).
+    """
+
+    corners: tuple[tuple[float, float], ...]
+    type: ClassVar[str] = "polygon"
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return np.array(self.corners, dtype=float)
+
+    @property
+    def normals(self) -> np.ndarray:
+        v = self.vertices
+        e = np.roll(v, -1, axis=0) - v
+        m = np.stack([e[:, 1], -e[:, 0]], axis=1)
+        return m / np.linalg.norm(m, axis=1, keepdims=True)
+
+    @property
+    def offsets(self) -> np.ndarray:
+        return np.einsum("ij,ij->i", self.normals, self.vertices)
+
+    def _closest(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closest boundary point and distance for points ``p (..., 2)``."""
+        a = self.vertices
+        b = np.roll(a, -1, axis=0)
+        ab = b - a
+        ap = p[..., None, :] - a
+        s = np.clip(np.einsum("...kj,kj->...k", ap, ab) / np.einsum("kj,kj->k", ab, ab), 0, 1)
+        foot = a + s[..., None] * ab
+        dist = np.linalg.norm(p[..., None, :] - foot, axis=-1)
+        k = np.argmin(dist, axis=-1)
+        closest = np.take_along_axis(foot, k[..., None, None], axis=-2)[..., 0, :]
+        return closest, np.take_along_axis(dist, k[..., None], axis=-1)[..., 0]
+
+    def signed_distance(self, points: Any) -> np.ndarray:
+        p = _as_points(points)
+        depth = np.max(p @ self.normals.T - self.offsets, axis=-1)
+        _, dist = self._closest(p)
+        return np.where(depth > 0, dist, depth)
+
+    def outward_normal(self, points: Any) -> np.ndarray:
+        p = _as_points(points)
+        lev = p @ self.normals.T - self.offsets
+        face = self.normals[np.argmax(lev, axis=-1)]
+        closest, dist = self._closest(p)
+        d = p - closest
+        radial = np.divide(d, dist[..., None], out=np.zeros_like(d), where=dist[..., None] > 0)
+        use_radial = (np.max(lev, axis=-1) > 0) & (dist > 0)
+        return np.where(use_radial[..., None], radial, face)
+
+    def probe_point(self) -> np.ndarray:
+        return self.vertices.mean(axis=0)
+
+    def to_dict(self, scale: float = 1.0) -> dict:
+        return {"type": "polygon", "vertices": (self.vertices / scale).tolist()}
+
+
+@dataclass(frozen=True)
+class HalfPlaneFinger(Finger):
+    """A half-plane finger ``{x : (x - point) . normal <= 0}``; ``normal`` is a unit
+    vector pointing out of the finger, towards the part."""
+
+    point: tuple[float, float]
+    normal: tuple[float, float]
+    type: ClassVar[str] = "halfplane"
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return np.zeros((0, 2))
+
+    def signed_distance(self, points: Any) -> np.ndarray:
+        return (_as_points(points) - np.asarray(self.point)) @ np.asarray(self.normal)
+
+    def outward_normal(self, points: Any) -> np.ndarray:
+        p = _as_points(points)
+        return np.broadcast_to(np.asarray(self.normal, dtype=float), p.shape).copy()
+
+    def to_dict(self, scale: float = 1.0) -> dict:
+        return {
+            "type": "halfplane",
+            "point": [self.point[0] / scale, self.point[1] / scale],
+            "normal": [float(self.normal[0]), float(self.normal[1])],
+        }
+
+
+FINGER_TYPES: dict[str, type[Finger]] = {
+    "point": PointFinger,
+    "disc": DiscFinger,
+    "polygon": PolygonFinger,
+    "halfplane": HalfPlaneFinger,
+}
+
+# --------------------------------------------------------------------------- file format
+
+try:  # pydantic is a core dependency; keep the import local to this module.
+    from pydantic import BaseModel, ConfigDict, Field, ValidationError
+except ImportError as err:  # pragma: no cover
+    raise ImportError("deformclosure.dspace.fingers needs pydantic>=2") from err
+
+_Pt = tuple[float, float]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=False)
+
+
+class _PointModel(_Model):
+    type: Literal["point"]
+    at: _Pt
+
+
+class _DiscModel(_Model):
+    type: Literal["disc"]
+    center: _Pt
+    radius: float
+
+
+class _PolygonModel(_Model):
+    type: Literal["polygon"]
+    vertices: list[_Pt]
+
+
+class _HalfPlaneModel(_Model):
+    type: Literal["halfplane"]
+    point: _Pt
+    normal: _Pt
+
+
+_FingerModel = Annotated[
+    Union[_PointModel, _DiscModel, _PolygonModel, _HalfPlaneModel], Field(discriminator="type")
+]
+
+
+class _FingerFile(_Model):
+    units: Literal["m", "mm", "cm", "in"]
+    fingers: list[_FingerModel]
+
+
+_FIELDS = {
+    "point": "type, at",
+    "disc": "type, center, radius",
+    "polygon": "type, vertices",
+    "halfplane": "type, point, normal",
+}
+_HINTS = {
+    "units": 'give "units" as one of "m", "mm", "cm", "in"',
+    "fingers": 'give "fingers" as a non-empty list of finger objects',
+    "at": "give the point as [x, y]",
+    "center": "give the centre as [x, y]",
+    "radius": "give the radius as a positive number in the file's units",
+    "vertices": "give the polygon as a list of [x, y] vertices",
+    "point": "give a point on the boundary line as [x, y]",
+    "normal": "give the normal as [nx, ny], pointing out of the finger towards the part",
+    "type": "use one of point, disc, polygon, halfplane",
+}
+
+
+def _loc_str(loc: Sequence[Any]) -> tuple[str, str | None]:
+    """Format a pydantic location like ``fingers[2].radius``; also return the field name."""
+    parts = list(loc)
+    # drop the discriminator tag pydantic inserts after the list index
+    if len(parts) >= 3 and parts[0] == "fingers" and isinstance(parts[1], int) and parts[2] in _FIELDS:
+        del parts[2]
+    parts = [p for p in parts if p != "function-after"]
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else ("." if out else "") + str(p)
+    field = next((str(p) for p in reversed(parts) if isinstance(p, str)), None)
+    return out or "(top level)", field
+
+
+def _message(err: ValidationError, source: str, raw: Any) -> str:
+    errors = err.errors()
+    rank = {"extra_forbidden": 0, "union_tag_invalid": 1, "union_tag_not_found": 1}
+    e = min(errors, key=lambda x: rank.get(x["type"], 2))
+    where, field = _loc_str(e["loc"])
+    kind = e["type"]
+    if kind in ("missing", "too_long", "too_short") and e["loc"] and isinstance(e["loc"][-1], int):
+        where = where[: where.rfind("[")]
+        return f"{source}: {where}: expected [x, y] with exactly 2 numbers"
+    if kind in ("tuple_type", "list_type") and field in ("at", "center", "point", "normal", "vertices"):
+        return f"{source}: {where}: expected a list; {_HINTS[field]}"
+    if kind == "union_tag_invalid":
+        tag = e.get("input", {}).get("type") if isinstance(e.get("input"), dict) else None
+        return f"{source}: {where}.type: unknown finger type {tag!r}; use one of point, disc, polygon, halfplane"
+    if kind == "union_tag_not_found":
+        return f'{source}: {where}: missing "type"; use one of point, disc, polygon, halfplane'
+    if kind == "extra_forbidden":
+        ftype = _finger_type_at(raw, e["loc"])
+        valid = _FIELDS.get(ftype, "units, fingers") if ftype else "units, fingers"
+        what = f"a {ftype} finger" if ftype else "the finger file"
+        return f"{source}: {where}: unknown field; valid fields for {what}: {valid}"
+    if kind == "missing":
+        ftype = _finger_type_at(raw, e["loc"])
+        hint = _HINTS.get(field or "", "")
+        if ftype:
+            return f"{source}: {where}: missing; a {ftype} finger needs {_FIELDS[ftype]}"
+        return f"{source}: {where}: missing; {hint}".rstrip("; ")
+    if kind in ("model_type", "dict_type", "model_attributes_type"):
+        hint = _HINTS.get(field or "", "see the finger file format in docs/dspace.md")
+        return f"{source}: {where}: expected a JSON object; {hint}"
+    if kind == "literal_error" and field == "units":
+        return f"{source}: units: {e.get('input')!r} is not a length unit; {_HINTS['units']}"
+    hint = _HINTS.get(field or "", "")
+    msg = e["msg"].rstrip(".")
+    return f"{source}: {where}: {msg}" + (f"; {hint}" if hint else "")
+
+
+def _finger_type_at(raw: Any, loc: Sequence[Any]) -> str | None:
+    if len(loc) >= 2 and loc[0] == "fingers" and isinstance(loc[1], int):
+        try:
+            t = raw["fingers"][loc[1]].get("type")
+        except (KeyError, IndexError, TypeError, AttributeError):
+            return None
+        return t if t in _FIELDS else None
+    return None
+
+
+def _convex_ccw(vertices: np.ndarray, where: str) -> np.ndarray:
+    """Validate a convex polygon, drop collinear vertices, return it counter-clockwise."""
+    v = np.asarray(vertices, dtype=float)
+    if len(v) < 3:
+        raise FingerError(f"{where}.vertices: a polygon needs at least 3 vertices, got {len(v)}")
+    scale = float(np.ptp(v, axis=0).max()) or 1.0
+    e = np.roll(v, -1, axis=0) - v
+    if np.any(np.linalg.norm(e, axis=1) <= 1e-12 * scale):
+        raise FingerError(f"{where}.vertices: repeated vertex; list each corner once without closing the ring")
+    area2 = float(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
+    if abs(area2) <= 1e-12 * scale**2:
+        raise FingerError(f"{where}.vertices: the polygon has zero area; give at least 3 non-collinear corners")
+    if area2 < 0:
+        v = v[::-1]
+        e = np.roll(v, -1, axis=0) - v
+    prev = np.roll(e, 1, axis=0)  # edge arriving at vertex i
+    cross = prev[:, 0] * e[:, 1] - prev[:, 1] * e[:, 0]  # turn at vertex i
+    lens = np.linalg.norm(e, axis=1) * np.linalg.norm(prev, axis=1)
+    if np.any(cross < -1e-12 * lens):
+        raise FingerError(
+            f"{where}.vertices: the polygon is not convex; split it into convex fingers or use its convex hull"
+        )
+    # winding must be simple: total turning of a convex polygon is exactly 2*pi
+    ang = np.arctan2(cross, np.einsum("ij,ij->i", prev, e))
+    if abs(ang.sum() - 2 * np.pi) > 1e-6:
+        raise FingerError(f"{where}.vertices: the polygon winds more than once; list the corners in order once")
+    v = v[cross > 1e-12 * lens]  # drop collinear corners (they are face points)
+    return v
+
+
+def fingers_from_dict(data: Any, source: str = "fingers") -> tuple[Finger, ...]:
+    """Build fingers from a finger-file dictionary (lengths converted to metres).
+
+    Parameters
+    ----------
+    data : dict
+        ``{"units": ..., "fingers": [...]}`` as described in the module docstring.
+    source : str
+        Name used at the start of error messages (usually the file name).
+
+    Returns
+    -------
+    tuple of Finger
+        In file order, SI units (m).
+
+    Raises
+    ------
+    FingerError
+        One-line message naming the offending field and the fix.
+
+    Examples
+    --------
+    >>> fingers_from_dict({"units": "mm", "fingers": [{"type": "disc", "center": [0, 0], "radius": 2}]})
+    (DiscFinger(center=(0.0, 0.0), radius=0.002),)
+    """
+    if not isinstance(data, dict):
+        raise FingerError(f'{source}: expected a JSON object {{"units": ..., "fingers": [...]}}')
+    try:
+        model = _FingerFile.model_validate(data)
+    except ValidationError as err:
+        raise FingerError(_message(err, source, data)) from None
+    if not model.fingers:
+        raise FingerError(f"{source}: fingers: the list is empty; {_HINTS['fingers']}")
+    f = LENGTH_UNITS[model.units]
+    out: list[Finger] = []
+    for i, m in enumerate(model.fingers):
+        where = f"{source}: fingers[{i}]"
+        if isinstance(m, _PointModel):
+            out.append(PointFinger(at=(m.at[0] * f, m.at[1] * f)))
+        elif isinstance(m, _DiscModel):
+            if not m.radius > 0:
+                raise FingerError(f"{where}.radius: must be > 0, got {m.radius:g}; {_HINTS['radius']}")
+            out.append(DiscFinger(center=(m.center[0] * f, m.center[1] * f), radius=m.radius * f))
+        elif isinstance(m, _PolygonModel):
+            v = _convex_ccw(np.asarray(m.vertices, dtype=float) * f, where)
+            out.append(PolygonFinger(corners=tuple((float(x), float(y)) for x, y in v)))
+        else:
+            n = np.asarray(m.normal, dtype=float)
+            norm = float(np.linalg.norm(n))
+            if not norm > 0:
+                raise FingerError(f"{where}.normal: must be non-zero; {_HINTS['normal']}")
+            n = n / norm
+            out.append(
+                HalfPlaneFinger(point=(m.point[0] * f, m.point[1] * f), normal=(float(n[0]), float(n[1])))
+            )
+    return tuple(out)
+
+
+def load_fingers(path: str | Path) -> tuple[Finger, ...]:
+    """Read and validate a finger file (JSON); see the module docstring for the format.
+
+    Parameters
+    ----------
+    path : str or Path
+        The finger file.
+
+    Returns
+    -------
+    tuple of Finger
+        SI units (m).
+
+    Raises
+    ------
+    FingerError
+        Unreadable file, invalid JSON or invalid content (one-line message).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as err:
+        raise FingerError(f"{path}: cannot read the finger file ({err.strerror or err})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise FingerError(f"{path}: not valid JSON (line {err.lineno} column {err.colno}: {err.msg})") from None
+    return fingers_from_dict(data, source=str(path))
+
+
+def fingers_to_dict(fingers: Sequence[Finger], units: str = "m") -> dict:
+    """Inverse of :func:`fingers_from_dict`: a finger-file dictionary in ``units``."""
+    if units not in LENGTH_UNITS:
+        raise FingerError(f"units: {units!r} is not a length unit; {_HINTS['units']}")
+    s = LENGTH_UNITS[units]
+    return {"units": units, "fingers": [f.to_dict(s) for f in fingers]}
+
+
+def write_fingers(fingers: Sequence[Finger], path: str | Path, units: str = "m") -> None:
+    """Write a finger file (JSON) in ``units``."""
+    Path(path).write_text(json.dumps(fingers_to_dict(fingers, units), indent=2) + "\n")

@@ -1,0 +1,317 @@
+"""Slices of D-space: one node moves, all others stay (paper §3.2, Fig. 3; SPEC §2).
+
+``dfree_slice`` sweeps one node over a grid of positions while every other node keeps
+its position in a base configuration ``q`` and returns, as images, membership in
+``D_T``, in every D-obstacle and in ``D_free``, and the energy.
+
+Only what depends on the moving node is recomputed per pixel (vectorised over the
+grid): the orientation of the triangles incident to the node, the (at most two)
+boundary edges at the node tested against the other boundary edges (pruned by bounding
+box) and, for every finger, the contributions of those two edges to the obstacle test
+(crossing parity, hits, distances; :mod:`.obstacles`). The linear energy is the exact
+quadratic ``U(q + e_v d) = U(q) + (K X)_v . d + 1/2 d^T K_vv d``; the corotational one
+adds the incident elements' energies to those of the others. Every pixel equals a
+direct call of :func:`.obstacles.in_dfree` / :func:`.energy.strain_energy` on the full
+configuration (tested).
+
+References
+----------
+K. Gopalakrishnan and K. Goldberg, IJRR 24(11), 2005, §3.2 and Fig. 3.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import DeformClosureError
+from .energy import EnergyKind, _ElementModel, as_configurations
+from .fingers import Finger
+from .obstacles import _collides, _edge_terms, touch_tolerance
+from .topology import DEFAULT_MIN_AREA_RATIO, _edge_pairs, _folded, _segments_meet, _signed_areas, loop_edges
+
+__all__ = ["SliceResult", "dfree_slice"]
+
+UNITS = {"length": "m", "energy": "J"}
+
+
+@dataclass(frozen=True)
+class SliceResult:
+    """D-space slice images (row ``iy`` = ``ys[iy]``, column ``ix`` = ``xs[ix]``).
+
+    Attributes
+    ----------
+    node : int
+        The moving node.
+    xs, ys : ndarray (nx,), (ny,)
+        Grid coordinates of the moving node (m), pixel centres.
+    free : ndarray (ny, nx) of bool
+        Membership in ``D_free``.
+    in_dt : ndarray (ny, nx) of bool
+        Membership in ``D_T``.
+    obstacles : ndarray (n_fingers, ny, nx) of bool
+        Membership in each finger's D-obstacle.
+    energy : ndarray (ny, nx)
+        Elastic energy (J) of each configuration, ``energy_kind``.
+    energy_kind : str
+        ``"linear"`` or ``"corotational"``.
+    q : ndarray (n, 2)
+        The base configuration (m); the moving node's own entry is its base position.
+    """
+
+    node: int
+    xs: np.ndarray
+    ys: np.ndarray
+    free: np.ndarray
+    in_dt: np.ndarray
+    obstacles: np.ndarray
+    energy: np.ndarray
+    energy_kind: str
+    q: np.ndarray = field(repr=False)
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """``(xmin, xmax, ymin, ymax)`` of the pixel centres (m)."""
+        return float(self.xs[0]), float(self.xs[-1]), float(self.ys[0]), float(self.ys[-1])
+
+    def configuration(self, ix: int, iy: int) -> np.ndarray:
+        """The full configuration ``(n, 2)`` (m) of pixel ``(iy, ix)``."""
+        x = self.q.copy()
+        x[self.node] = (self.xs[ix], self.ys[iy])
+        return x
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (SI units; images as nested lists, row = y)."""
+        return {
+            "node": int(self.node),
+            "xs": self.xs.tolist(),
+            "ys": self.ys.tolist(),
+            "base_position": self.q[self.node].tolist(),
+            "free": self.free.astype(int).tolist(),
+            "in_dt": self.in_dt.astype(int).tolist(),
+            "obstacles": self.obstacles.astype(int).tolist(),
+            "energy": self.energy.tolist(),
+            "energy_kind": self.energy_kind,
+            "free_fraction": float(self.free.mean()),
+            "units": dict(UNITS),
+        }
+
+    def save(self, path: str | Path) -> None:
+        """Write ``.npz`` (arrays) or ``.json`` (:meth:`to_dict`), chosen by the suffix."""
+        path = Path(path)
+        if path.suffix.lower() == ".json":
+            path.write_text(json.dumps(self.to_dict()) + "\n")
+            return
+        np.savez_compressed(
+            path, node=self.node, xs=self.xs, ys=self.ys, free=self.free, in_dt=self.in_dt,
+            obstacles=self.obstacles, energy=self.energy, energy_kind=self.energy_kind, q=self.q,
+            units=json.dumps(UNITS),
+        )
+
+
+def _resolution(resolution: Any) -> tuple[int, int]:
+    r = np.atleast_1d(np.asarray(resolution))
+    if r.size == 1:
+        r = np.repeat(r, 2)
+    if r.size != 2 or not np.all(r == np.round(r)) or np.any(r < 2):
+        raise DeformClosureError(f"resolution = {resolution!r}: give an int >= 2 or (nx, ny)")
+    return int(r[0]), int(r[1])
+
+
+def dfree_slice(
+    mesh: Any,
+    q: Any,
+    node: int,
+    fingers: Sequence[Finger],
+    extent: Sequence[float] | None = None,
+    resolution: int | tuple[int, int] = 200,
+    *,
+    energy: EnergyKind = "linear",
+    stiffness: Any = None,
+    tol: float | None = None,
+    min_area_ratio: float = DEFAULT_MIN_AREA_RATIO,
+) -> SliceResult:
+    """D_free membership and energy while one node moves and the others stay (paper Fig. 3).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The part (rest configuration ``q0 = mesh.nodes``, m) with its material.
+    q : array_like (n, 2) or (2n,), or None
+        Base configuration (m); ``None`` for the rest configuration.
+    node : int
+        The moving node.
+    fingers : sequence of Finger
+    extent : (xmin, xmax, ymin, ymax), optional
+        Region swept by the node (m). Default: a square centred on the node's base
+        position, half-width twice its longest incident edge.
+    resolution : int or (nx, ny)
+        Number of pixel centres per axis (the extent's edges are pixel centres).
+    energy : {"linear", "corotational"}
+        Which energy the image shows.
+    stiffness : sparse matrix, optional
+        ``K`` (N/m) for the linear energy; assembled from the mesh when omitted.
+    tol : float, optional
+        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter``.
+    min_area_ratio : float
+        ``D_T`` triangle-area threshold (see :func:`.topology.in_dt`).
+
+    Returns
+    -------
+    SliceResult
+
+    Raises
+    ------
+    DeformClosureError
+        Bad node id, extent or resolution.
+    """
+    nodes0 = np.asarray(mesh.nodes, dtype=float)
+    n = len(nodes0)
+    x = nodes0.copy() if q is None else as_configurations(q, n)[0][0].copy()
+    if isinstance(node, bool) or not isinstance(node, (int, np.integer)) or not 0 <= int(node) < n:
+        raise DeformClosureError(f"node = {node!r}: must be a node id in 0..{n - 1}")
+    v = int(node)
+    if energy not in ("linear", "corotational"):
+        raise DeformClosureError(f"energy = {energy!r}: use 'linear' or 'corotational'")
+    tri = np.asarray(mesh.triangles, dtype=np.int64)
+    inc = np.flatnonzero(np.any(tri == v, axis=1))
+    if extent is None:
+        nb = np.unique(tri[inc])
+        h = float(np.linalg.norm(x[nb] - x[v], axis=1).max())
+        extent = (x[v, 0] - 2 * h, x[v, 0] + 2 * h, x[v, 1] - 2 * h, x[v, 1] + 2 * h)
+    ext = np.asarray(extent, dtype=float).ravel()
+    if ext.size != 4 or not np.all(np.isfinite(ext)) or ext[1] <= ext[0] or ext[3] <= ext[2]:
+        raise DeformClosureError(f"extent = {extent!r}: give (xmin, xmax, ymin, ymax) with xmin < xmax, ymin < ymax")
+    nx, ny = _resolution(resolution)
+    xs = np.linspace(ext[0], ext[1], nx)
+    ys = np.linspace(ext[2], ext[3], ny)
+    G = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)  # (P, 2), row-major in y
+    P = len(G)
+    tol = touch_tolerance(mesh) if tol is None else float(tol)
+    fingers = list(fingers)
+
+    # --- D_T: triangles
+    rest_area = _signed_areas(nodes0[None], tri)[0]
+    areas_fixed = _signed_areas(x[None], tri)[0]
+    fixed_tri = np.ones(len(tri), bool)
+    fixed_tri[inc] = False
+    ok_fixed = bool(np.all(areas_fixed[fixed_tri] > min_area_ratio * rest_area[fixed_tri]))
+    pts = x[tri[inc]]  # (k, 3, 2)
+    pts = np.broadcast_to(pts, (P,) + pts.shape).copy()
+    slot = tri[inc] == v  # (k, 3)
+    kk, jj = np.nonzero(slot)
+    pts[:, kk, jj, :] = G[:, None, :]
+    d1 = pts[..., 1, :] - pts[..., 0, :]
+    d2 = pts[..., 2, :] - pts[..., 0, :]
+    ar = 0.5 * (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0])
+    in_dt = np.all(ar > min_area_ratio * rest_area[inc], axis=1) & ok_fixed
+
+    # --- D_T: boundary rings
+    edges = loop_edges(mesh.loops)
+    moving = np.flatnonzero(np.any(edges == v, axis=1))
+    pairs, adj = _edge_pairs(edges)
+    if len(moving) == 0:
+        fixed_bad = _ring_problems(x, edges, pairs, adj)
+        in_dt &= not fixed_bad
+    else:
+        is_mov = np.zeros(len(edges), bool)
+        is_mov[moving] = True
+        fp = pairs[~is_mov[pairs[:, 0]] & ~is_mov[pairs[:, 1]]]
+        fa = adj[~np.any(adj == v, axis=1)]
+        in_dt &= not _ring_problems(x, edges, fp, fa)
+        # consecutive triples that contain the moving node: fold-back tests per pixel
+        for a_, b_, c_ in adj[np.any(adj == v, axis=1)]:
+            pa = G if a_ == v else np.broadcast_to(x[a_], G.shape)
+            pb = G if b_ == v else np.broadcast_to(x[b_], G.shape)
+            pc = G if c_ == v else np.broadcast_to(x[c_], G.shape)
+            in_dt &= ~_folded(pa, pb, pc)
+        # moving edges against the non-adjacent fixed edges, pruned by bounding box
+        lo_g, hi_g = G.min(axis=0), G.max(axis=0)
+        for e in moving:
+            other = int(edges[e, 0] if edges[e, 1] == v else edges[e, 1])
+            cand = np.flatnonzero(~is_mov & ~np.any(np.isin(edges, edges[e]), axis=1))
+            lo = np.minimum(lo_g, x[other])
+            hi = np.maximum(hi_g, x[other])
+            ea, eb = x[edges[cand, 0]], x[edges[cand, 1]]
+            box = np.all((np.minimum(ea, eb) <= hi) & (np.maximum(ea, eb) >= lo), axis=1)
+            cand = cand[box]
+            if len(cand):
+                ga = G[:, None, :]
+                oa = np.broadcast_to(x[other], G.shape)[:, None, :]
+                meet = _segments_meet(ga, oa, x[edges[cand, 0]][None], x[edges[cand, 1]][None])
+                in_dt &= ~meet.any(axis=1)
+
+    # --- D-obstacles
+    obstacles = np.zeros((len(fingers), P), dtype=bool)
+    if len(moving) == 0:
+        a, b = x[edges[:, 0]], x[edges[:, 1]]
+        for i, f in enumerate(fingers):
+            obstacles[i] = bool(_collides(f, _edge_terms(f, a[None], b[None], tol), tol)[0])
+    else:
+        fixed = np.setdiff1d(np.arange(len(edges)), moving)
+        fa_, fb_ = x[edges[fixed, 0]][None], x[edges[fixed, 1]][None]
+        ma = np.empty((P, len(moving), 2))
+        mb = np.empty((P, len(moving), 2))
+        for j, e in enumerate(moving):
+            ma[:, j] = G if edges[e, 0] == v else x[edges[e, 0]]
+            mb[:, j] = G if edges[e, 1] == v else x[edges[e, 1]]
+        for i, f in enumerate(fingers):
+            t_fixed = _edge_terms(f, fa_, fb_, tol)
+            t_mov = _edge_terms(f, ma, mb, tol)
+            obstacles[i] = _collides(f, t_mov.combine(t_fixed), tol)
+    free = in_dt & ~np.any(obstacles, axis=0)
+
+    # --- energy
+    if energy == "linear":
+        if stiffness is None:
+            from ..elasticity.stiffness import stiffness_matrix
+
+            stiffness = stiffness_matrix(mesh)
+        X = (x - nodes0).ravel()
+        KX = stiffness @ X
+        U0 = 0.5 * float(X @ KX)
+        dofs = [2 * v, 2 * v + 1]
+        Kvv = stiffness[dofs][:, dofs].toarray()
+        d = G - x[v]
+        U = U0 + d @ KX[dofs] + 0.5 * np.einsum("pi,ij,pj->p", d, Kvv, d)
+    else:
+        model = _ElementModel(mesh)
+        e_all = model.energies(x[None], "corotational")[0]
+        base = float(e_all[fixed_tri].sum())
+        # only the incident triangles' node positions matter: build them directly
+        U = base + _incident_energies(model, x, v, inc, G).sum(axis=1)
+    shape = (ny, nx)
+    return SliceResult(
+        node=v, xs=xs, ys=ys, free=free.reshape(shape), in_dt=in_dt.reshape(shape),
+        obstacles=obstacles.reshape((len(fingers),) + shape), energy=U.reshape(shape),
+        energy_kind=energy, q=x,
+    )
+
+
+def _ring_problems(x: np.ndarray, edges: np.ndarray, pairs: np.ndarray, adj: np.ndarray) -> bool:
+    """Do the given boundary-edge pairs meet, or consecutive edges fold, in configuration ``x``?"""
+    bad = False
+    if len(adj):
+        bad |= bool(np.any(_folded(x[adj[:, 0]], x[adj[:, 1]], x[adj[:, 2]])))
+    if len(pairs) and not bad:
+        e1, e2 = edges[pairs[:, 0]], edges[pairs[:, 1]]
+        bad |= bool(np.any(_segments_meet(x[e1[:, 0]], x[e1[:, 1]], x[e2[:, 0]], x[e2[:, 1]])))
+    return bad
+
+
+def _incident_energies(model: _ElementModel, x: np.ndarray, v: int, inc: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """Corotational energies ``(P, k)`` of the triangles incident to ``v`` for every pixel."""
+    tri = model.triangles[inc]
+    p = np.broadcast_to(x[tri], (len(G),) + tri.shape + (2,)).copy()  # (P, k, 3, 2)
+    kk, jj = np.nonzero(tri == v)
+    p[:, kk, jj, :] = G[:, None, :]
+    ds = np.stack([p[..., 1, :] - p[..., 0, :], p[..., 2, :] - p[..., 0, :]], axis=-1)
+    F = ds @ model.dm_inv[inc]
+    from .energy import _strains_from_F
+
+    eps = _strains_from_F(F, "corotational")
+    return 0.5 * model.t * model.areas[inc] * np.einsum("...i,ij,...j->...", eps, model.D, eps)
