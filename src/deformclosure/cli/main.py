@@ -20,6 +20,9 @@ Examples:
   deformclosure demo
   deformclosure mesh examples/rectangle.json -o mesh.json --plot mesh.png
   deformclosure optimize examples/rectangle.json --at 0,10 12,10 -o report.json --plot out/
+  deformclosure check examples/l_shape.json --fingers examples/fingers/l_shape.json
+  deformclosure plan examples/rectangle.json --top 10 -o plan.json --plot plan/
+  deformclosure batch examples/ -o results.sqlite
 """
 
 
@@ -34,12 +37,16 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import demo, mesh_cmd, optimize, plan
+    from . import batch, check, demo, mesh_cmd, optimize, plan, results, slice
 
     cli.add_command(demo.command, "demo")
     cli.add_command(mesh_cmd.command, "mesh")
+    cli.add_command(check.command, "check")
+    cli.add_command(slice.command, "slice")
     cli.add_command(optimize.command, "optimize")
     cli.add_command(plan.command, "plan")
+    cli.add_command(batch.command, "batch")
+    cli.add_command(results.command, "results")
 
 
 _register()

@@ -1,0 +1,75 @@
+"""Batch throughput: the same jobs on a local pool of 1 and 2 worker processes.
+
+Run:  python benchmarks/bench_batch.py [--jobs 8] [--workers 1 2] [--repeat 3]
+
+The jobs are ``plan`` runs on the example parts (then ``optimize`` on the rectangle with
+other jaw positions, if more jobs are asked for than there are examples). Each row is
+a fresh results file, so every job runs; the wall time (best of ``--repeat`` runs)
+includes starting the worker processes, not the fork server they come from (started
+once, before timing). "job time" is the sum of the jobs' own run times. A last line
+re-runs the batch on a finished file: the cost of resuming (every job skipped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from deformclosure.planning.batch import _mp_context, load_jobs, read_results, run_batch
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def job_list(folder: Path, n: int) -> Path:
+    """A JSON job list of ``n`` distinct jobs on the example parts."""
+    parts = sorted(EXAMPLES.glob("*.json"))
+    entries = [{"part": str(p), "command": "plan", "options": ["--top", "3", "--quiet"]}
+               for p in parts[:n]]
+    for i in range(n - len(entries)):
+        y = 2 + 16 * (i + 0.5) / max(1, n - len(parts))
+        entries.append({"part": str(EXAMPLES / "rectangle.json"), "command": "optimize",
+                        "options": ["--at", f"0,{y:.3f}", f"12,{y:.3f}"]})
+    path = folder / "jobs.json"
+    path.write_text(json.dumps(entries))
+    return path
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=8)
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        jobs = load_jobs(job_list(tmp, args.jobs))
+        print(f"{len(jobs)} jobs ({sum(j.command == 'plan' for j in jobs)} plan, "
+              f"{sum(j.command == 'optimize' for j in jobs)} optimize), {cores} CPU cores")
+        print(f"{'workers':>7} {'wall (s)':>9} {'job time (s)':>13} {'jobs/s':>7} {'speed-up':>9}")
+        _mp_context()  # start the fork server (it imports the package once) before timing
+        base = None
+        for w in args.workers:
+            best = (float("inf"), 0.0)
+            for r in range(args.repeat):
+                db = tmp / f"w{w}-{r}.sqlite"
+                t = time.perf_counter()
+                s = run_batch(jobs, db, workers=w, progress=False)
+                wall = time.perf_counter() - t
+                assert s.n_failed == 0, s.failures
+                best = min(best, (wall, sum(row["seconds"] for row in read_results(db))))
+            wall, busy = best
+            base = base or wall
+            print(f"{w:>7} {wall:>9.2f} {busy:>13.2f} {len(jobs) / wall:>7.2f} {base / wall:>8.2f}x")
+        t = time.perf_counter()
+        s = run_batch(jobs, db, workers=args.workers[-1], progress=False)
+        wall = time.perf_counter() - t
+        print(f"resume of a finished file: {s.n_skipped} jobs skipped in {wall:.3f} s")
+
+
+if __name__ == "__main__":
+    main()

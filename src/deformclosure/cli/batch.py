@@ -1,0 +1,61 @@
+"""``deformclosure batch JOBS -o results.sqlite``: many jobs, resumable results (SPEC §5)."""
+
+from __future__ import annotations
+
+import click
+
+__all__ = ["command"]
+
+EPILOG = """\b
+Examples:
+  deformclosure batch parts/ -o results.sqlite --options "--top 5"
+  deformclosure batch jobs.json -o results.sqlite --workers 4
+  deformclosure batch jobs.csv -o results.sqlite --scheduler tcp://10.0.0.5:8786
+  deformclosure results results.sqlite --format csv -o results.csv
+
+\b
+JOBS is a folder (one job per part or mesh file, running --command with --options)
+or a job list: JSON [{"part": "a.json", "command": "optimize", "options": ["--at",
+"0,10", "12,10"]}, ...] or CSV with the header part,command,options (options one
+shell-quoted string); paths relative to the list file.
+\b
+Each finished job is committed at once; run the same command again to resume: jobs
+already in the results file are skipped (--retry-failed runs failed ones again).
+Exit code: 0 if every job is ok, 1 if some failed, 2 for bad batch input.
+"""
+
+
+@click.command(epilog=EPILOG)
+@click.argument("jobs", type=click.Path())
+@click.option("-o", "--output", "db", required=True, type=click.Path(dir_okay=False),
+              help="SQLite results file (created, or resumed if it exists).")
+@click.option("--command", "job_command", default="plan", show_default=True,
+              help="Command run on each file of a folder (and on list entries naming none).")
+@click.option("--options", "job_options", default="", metavar="'OPTS'",
+              help="Options of that command, one shell-quoted string (--options '--top 5').")
+@click.option("--scheduler", default="processes", show_default=True,
+              help="processes (local pool), inline (this process; debugging) or a Dask "
+                   "scheduler address tcp://HOST:PORT.")
+@click.option("--workers", type=int, default=None,
+              help="Local worker processes (default: CPUs); with Dask, the most jobs in flight.")
+@click.option("--retry-failed", is_flag=True, help="Run failed jobs again.")
+@click.option("--quiet", is_flag=True, help="No progress bar and no summary.")
+def command(jobs, db, job_command, job_options, scheduler, workers, retry_failed, quiet) -> int:
+    """Run a command on many part files, resumably.
+
+    One row per job in an SQLite results file, committed as each job finishes.
+    """
+    from ..planning.batch import load_jobs, run_batch
+
+    job_list = load_jobs(jobs, command=job_command, options=job_options)
+    s = run_batch(job_list, db, scheduler=scheduler, workers=workers,
+                  retry_failed=retry_failed, progress=not quiet)
+    if not quiet:
+        extra = f" ({s.n_duplicates} duplicate entries)" if s.n_duplicates else ""
+        click.echo(f"{s.n_jobs} jobs{extra}: {s.n_run} run, {s.n_skipped} already done; "
+                   f"{s.n_ok} ok, {s.n_failed} failed -> {db} ({s.seconds:.1f} s)")
+        for f in s.failures[:20]:
+            click.echo(f"failed: {f['part']} ({f['command']}): {f['error']}")
+        if len(s.failures) > 20:
+            click.echo(f"... and {len(s.failures) - 20} more: deformclosure results {db}")
+    return s.exit_code
