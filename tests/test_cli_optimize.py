@@ -75,6 +75,21 @@ def test_expanding_grasp_on_ring(tmp_path):
     assert r["quality"] == pytest.approx(out["paper"]["quality"], rel=1e-9, abs=1e-15)
 
 
+def test_approx_default_eps_is_documented_and_guaranteed(tmp_path):
+    """--method approx without --eps uses ε = 1e-3 · ½ k01 (σ0 − σ_L)² and stays within
+    that ε of the exact optimum."""
+    part = _small_part(tmp_path, [[0, 0], [12, 0], [12, 20], [0, 20]], max_area=4.0)
+    out = {}
+    for method in ("approx", "exact"):
+        o = tmp_path / f"{method}.json"
+        assert main(["optimize", str(part), "--at", "0,10", "12,10", "--method", method, "-o", str(o)]) == 0
+        out[method] = json.loads(o.read_text())
+    a, e = out["approx"], out["exact"]
+    eps = 1e-3 * 0.5 * a["k01"] * (a["sigma0"] - a["sigma_L"]) ** 2
+    assert a["epsilon"] == pytest.approx(eps, rel=1e-12)
+    assert e["quality"] - eps <= a["quality"] <= e["quality"] * (1 + 1e-12)
+
+
 BAD = [
     (["--jaws", "3", "3"], "same node|both jaws"),
     (["--at", "6,10", "12,10"], "interior"),

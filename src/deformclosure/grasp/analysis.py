@@ -204,6 +204,17 @@ class GraspAnalysis:
         return report
 
 
+def default_epsilon(limit: ElasticLimit) -> float:
+    """Default ε (J) of the approximate method: ``1e-3 · ½ k01 (σ0 − σ_L)²``.
+
+    The energy of the jaw pair squeezed to its elastic limit bounds ``U_L`` on the whole
+    range, hence ``Q``; a thousandth of it is a tolerance on the scale of the answer.
+    Falls back to ``1e-12`` J when the range is empty or not finite.
+    """
+    e = 1e-3 * 0.5 * limit.k01 * (limit.sigma0 - limit.sigma_L) ** 2
+    return float(e) if np.isfinite(e) and e > 0 else 1e-12
+
+
 def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = None,
                         method: str = "exact", eps: float | None = None,
                         mode: str = "contracting", jaw_width: float = 0.0,
@@ -226,7 +237,11 @@ def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = 
         ``"paper"``: every pairwise crossing (reference, small parts only);
         ``"approx"``: the paper's ε-approximation on a grid, ``eps`` in J.
     eps : float, optional
-        Tolerance (J) of ``"approx"``; required for it.
+        Tolerance (J) of ``"approx"``. Default: ``1e-3 · ½ k01 (σ0 − σ_L)²``, a
+        thousandth of the energy the jaw pair stores when squeezed to the elastic limit
+        (an upper bound of ``Q*`` up to the U_A cap, so ε is relative to the scale of
+        the answer); the value used is reported as ``epsilon``. When ``σ_L = σ0`` (no
+        room to squeeze) a default of ``1e-12`` J is used.
     mode : {"contracting", "expanding"}
     jaw_width : float
         Jaw contact width (m).
@@ -244,9 +259,6 @@ def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = 
     """
     if method not in METHODS:
         raise GraspError(f"method = {method!r}: use one of {', '.join(METHODS)}")
-    if method == "approx":
-        if eps is None:
-            raise GraspError("eps: the 'approx' method needs a tolerance eps > 0 in joules")
     if eps is not None and not (np.isfinite(eps) and eps > 0):
         raise GraspError(f"eps = {eps!r}: must be a finite energy > 0 in joules")
     if model is None:
@@ -259,6 +271,8 @@ def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = 
     t0 = time.perf_counter()
     limit = elastic_limit(mesh, model.condensed, n0, n1, mode=mode, jaw_width=jaw_width)
     t["elastic_limit"] = time.perf_counter() - t0
+    if method == "approx" and eps is None:
+        eps = default_epsilon(limit)
     t0 = time.perf_counter()
     sep = optimize_separation_arrays(model.stiffness.sigma0, model.stiffness.k, model.graph,
                                      start, limit.sigma_L, mode=mode, method=method, eps=eps,
