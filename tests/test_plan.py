@@ -64,6 +64,18 @@ def test_plan_e_max_matches_single_pair_solution():
         assert plan.sigma_L[i] == pytest.approx(lim.sigma_L, rel=1e-9, abs=1e-15)
 
 
+def test_plan_e_max_matches_single_pair_solution_for_wide_jaws():
+    """Finite-width jaws load several nodes per jaw; the planner's kernel must sum them
+    exactly like the single-pair solve."""
+    mesh = _mesh("rectangle")
+    width = 2.5e-3
+    plan = plan_grasps(mesh, top=0, n_sigma=10, jaw_width=width)
+    for i in np.random.default_rng(1).choice(len(plan.pairs), 8, replace=False):
+        a, b = (int(v) for v in plan.pairs[i])
+        lim = elastic_limit(mesh, plan.model.condensed, a, b, jaw_width=width)
+        assert plan.e_max[i] == pytest.approx(lim.e_max, rel=1e-9)
+
+
 def test_refined_top_pairs_are_exact_and_not_worse_than_lattice():
     mesh = _mesh("rectangle")
     plan = plan_grasps(mesh, top=3, n_sigma=150)

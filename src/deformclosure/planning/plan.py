@@ -125,58 +125,69 @@ class PlanResult:
 
 
 def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
-                        elastic_limit_strain: float, chunk: int = 256
+                        elastic_limit_strain: float, max_bytes: float = 4e9
                         ) -> tuple[np.ndarray, np.ndarray]:
     """``e_max`` (1/m) and ``σ_L`` (m) of many graph vertices at once.
 
-    The strain of every element under a unit force at every perimeter DOF is
-    ``T = B K⁺ E_b`` (one block solve); a jaw pair's strain per unit distance change
-    is ``Σ_i λ_i T_i e`` over its contact nodes (``λ = ±k`` for point jaws).
+    The strain of every element under a unit force at every loaded perimeter DOF is
+    ``T = B K⁺ E_b`` (one block solve with the model's factorisation); a jaw pair's
+    strain per unit distance change is ``Σ_j λ_j T_j e`` over its contact nodes
+    (``λ = ±k`` for point jaws), maximised over the elements by a compiled kernel.
+
+    Parameters
+    ----------
+    model : GraspModel
+    pairs_idx : ndarray of int
+        Graph vertices (jaw pairs).
+    elastic_limit_strain : float
+        ``e_L`` (-).
+    max_bytes : float
+        Memory allowed for ``T`` (bytes); a larger request raises ``GraspError``.
     """
+    from ._kernels import max_strain_magnitude
+
     mesh = model.mesh
     cc = model.condensed
-    bnd = cc.boundary
-    q = len(bnd)
-    n2 = 2 * mesh.n_nodes
-    E = np.zeros((n2, 2 * q))
-    cols = np.arange(2 * q)
-    dofs = np.column_stack([2 * bnd, 2 * bnd + 1]).ravel()
-    E[dofs, cols] = 1.0
-    # Unit forces at single DOFs are not self-equilibrated; the pinned solve adds
-    # reactions at the pins, but every jaw-pair combination below is self-equilibrated,
-    # so the reactions cancel and the strains are exact.
-    X = cc.solve(E)                                            # (2n, 2q)
-    B, _ = element_b_matrices(mesh.nodes, mesh.triangles)      # (m, 3, 6)
-    tri_dofs = np.empty((mesh.n_triangles, 6), dtype=np.int64)
-    tri_dofs[:, 0::2] = 2 * mesh.triangles
-    tri_dofs[:, 1::2] = 2 * mesh.triangles + 1
-    T = np.einsum("mij,mjc->mic", B, X[tri_dofs])             # (m, 3, 2q)
-    T = T.reshape(mesh.n_triangles, 3, q, 2)
     pairs = model.graph.pairs[pairs_idx]
     e = mesh.nodes[pairs[:, 1]] - mesh.nodes[pairs[:, 0]]
     sig0 = np.linalg.norm(e, axis=1)
     e /= sig0[:, None]
-    k = model.stiffness.k[pairs_idx]
-    pa = cc.position(pairs[:, 0])
-    pb = cc.position(pairs[:, 1])
     if model.jaw_width:
-        nodes_sets, forces = _wide_forces(model, pairs)
-    e_max = np.empty(len(pairs))
-    for lo in range(0, len(pairs), chunk):
-        sl = slice(lo, lo + chunk)
-        if model.jaw_width:
-            eps = np.zeros((mesh.n_triangles, 3, len(range(*sl.indices(len(pairs))))))
-            for j, (J, lam) in enumerate(zip(nodes_sets[sl], forces[sl])):
-                P = cc.position(J)
-                eps[:, :, j] = np.einsum("mipc,p,c->mi", T[:, :, P, :], lam, e[lo + j])
-        else:
-            # Point jaws: +k e at a, −k e at b (unit approach).
-            Ta = np.einsum("micv,vc->miv", T[:, :, pa[sl], :].transpose(0, 1, 3, 2), e[sl])
-            Tb = np.einsum("micv,vc->miv", T[:, :, pb[sl], :].transpose(0, 1, 3, 2), e[sl])
-            eps = (Ta - Tb) * k[sl]
-        exx, eyy, g = eps[:, 0], eps[:, 1], eps[:, 2]
-        mag = np.abs(0.5 * (exx + eyy)) + np.hypot(0.5 * (exx - eyy), 0.5 * g)
-        e_max[sl] = mag.max(axis=0)
+        node_sets, forces = _wide_forces(model, pairs)
+        counts = np.array([len(J) for J in node_sets], dtype=np.int64)
+        loaded = np.concatenate([np.asarray(J, dtype=np.int64) for J in node_sets])
+        weight = np.concatenate([np.asarray(f, dtype=float) for f in forces])
+    else:
+        counts = np.full(len(pairs), 2, dtype=np.int64)
+        loaded = pairs.ravel().astype(np.int64)
+        k = model.stiffness.k[pairs_idx]
+        weight = np.column_stack([k, -k]).ravel()           # +k e at a, −k e at b
+    ptr = np.concatenate([[0], np.cumsum(counts)])
+    nodes_used, pos = np.unique(loaded, return_inverse=True)
+    q = len(nodes_used)
+    need = 8.0 * mesh.n_triangles * 3 * q * 2 + 8.0 * 2 * mesh.n_nodes * 2 * q
+    if need > max_bytes:
+        raise GraspError(f"planning all pairs of this part needs {need / 1e9:.1f} GB for the strain "
+                         f"responses of {q} perimeter nodes; restrict the pairs (regions, separation "
+                         f"range) or coarsen the perimeter")
+    n2 = 2 * mesh.n_nodes
+    E = np.zeros((n2, 2 * q))
+    E[2 * nodes_used, 2 * np.arange(q)] = 1.0
+    E[2 * nodes_used + 1, 2 * np.arange(q) + 1] = 1.0
+    # Unit forces at single DOFs are not self-equilibrated; the pinned solve adds
+    # reactions at the pins, but every jaw-pair combination below is self-equilibrated,
+    # so the reactions cancel and the strains are exact.
+    X = cc.solve(E)                                            # (2n, 2q)
+    del E
+    B, _ = element_b_matrices(mesh.nodes, mesh.triangles)      # (m, 3, 6)
+    tri_dofs = np.empty((mesh.n_triangles, 6), dtype=np.int64)
+    tri_dofs[:, 0::2] = 2 * mesh.triangles
+    tri_dofs[:, 1::2] = 2 * mesh.triangles + 1
+    # T[P, c, i, :] = strain of element i under a unit force at node P, direction c
+    T = np.einsum("mij,mjr->rmi", B, X[tri_dofs]).reshape(q, 2, mesh.n_triangles, 3)
+    del X
+    e_max = max_strain_magnitude(np.ascontiguousarray(T), ptr, pos.astype(np.int64),
+                                 weight, np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1]))
     travel = elastic_limit_strain / e_max
     if model.mode == "contracting":
         sigma_L = np.maximum(0.0, sig0 - travel)
