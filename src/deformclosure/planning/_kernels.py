@@ -11,15 +11,15 @@ from numba import njit, prange
 __all__ = ["max_strain_magnitude"]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=True)
 def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - compiled
     """``e_max`` of every pair: ``max_i |ε_i|`` with ``ε_i = Σ_j w_j T[P_j, :, i, :]·e``.
 
     Parameters
     ----------
-    T : float64 (q, 2, m, 3)
-        Strain ``(ε_xx, ε_yy, γ_xy)`` of element ``i`` under a unit force (N) at
-        condensed node ``P`` in direction x (0) or y (1) (1/N).
+    T : float64 (q, m, 6)
+        ``T[P, i, 3c:3c+3]``: strain ``(ε_xx, ε_yy, γ_xy)`` of element ``i`` under a unit
+        force (N) at loaded node ``P`` in direction x (c = 0) or y (c = 1) (1/N).
     ptr, pos, weight : CSR of the pairs
         Pair ``s`` loads nodes ``pos[ptr[s]:ptr[s+1]]`` with forces ``weight`` (N per
         metre of approach) along its unit direction ``(ex[s], ey[s])``.
@@ -30,7 +30,7 @@ def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - com
         Largest strain magnitude ``|½(εxx+εyy)| + √(¼(εxx−εyy)² + ¼γ²)`` (1/m).
     """
     n = len(ptr) - 1
-    m = T.shape[2]
+    m = T.shape[1]
     out = np.empty(n)
     for s in prange(n):
         best = 0.0
@@ -42,9 +42,9 @@ def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - com
                 p = pos[j]
                 wx = weight[j] * ex[s]
                 wy = weight[j] * ey[s]
-                exx += wx * T[p, 0, i, 0] + wy * T[p, 1, i, 0]
-                eyy += wx * T[p, 0, i, 1] + wy * T[p, 1, i, 1]
-                g += wx * T[p, 0, i, 2] + wy * T[p, 1, i, 2]
+                exx += wx * T[p, i, 0] + wy * T[p, i, 3]
+                eyy += wx * T[p, i, 1] + wy * T[p, i, 4]
+                g += wx * T[p, i, 2] + wy * T[p, i, 5]
             mag = abs(0.5 * (exx + eyy)) + np.sqrt(0.25 * (exx - eyy) ** 2 + 0.25 * g * g)
             if mag > best:
                 best = mag

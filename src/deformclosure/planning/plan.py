@@ -19,7 +19,9 @@ the perimeter DOFs (one block solve with the factorisation already built).
 from __future__ import annotations
 
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
@@ -183,8 +185,9 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     tri_dofs = np.empty((mesh.n_triangles, 6), dtype=np.int64)
     tri_dofs[:, 0::2] = 2 * mesh.triangles
     tri_dofs[:, 1::2] = 2 * mesh.triangles + 1
-    # T[P, c, i, :] = strain of element i under a unit force at node P, direction c
+    # T[P, i, 3c:3c+3] = strain of element i under a unit force at node P, direction c
     T = np.einsum("mij,mjr->rmi", B, X[tri_dofs]).reshape(q, 2, mesh.n_triangles, 3)
+    T = T.transpose(0, 2, 1, 3).reshape(q, mesh.n_triangles, 6)
     del X
     e_max = max_strain_magnitude(np.ascontiguousarray(T), ptr, pos.astype(np.int64),
                                  weight, np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1]))
@@ -326,20 +329,28 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     kk = k[idx]
     UsL = 0.5 * kk * (s0 - sigma_L) ** 2                # U_s(σ_L) per pair (J)
     t0 = time.perf_counter()
-    for j, sig in enumerate(grid):
+
+    def sweep(sig: float) -> tuple[np.ndarray, np.ndarray]:
         U = vertex_energies(sig, sigma0, k, mode)
-        R = release_energies(U, graph)[idx]
-        UL = UsL - U[idx]
-        inside = (sig >= sigma_L) & (sig <= s0) if mode == "contracting" \
-            else (sig >= s0) & (sig <= sigma_L)
-        Q = np.where(inside, np.minimum(R, UL), -np.inf)
-        better = Q > best_Q
-        best_Q = np.where(better, Q, best_Q)
-        best_s = np.where(better, sig, best_s)
-        best_UA = np.where(better, R, best_UA)
-        best_UL = np.where(better, UL, best_UL)
-        if progress is not None:
-            progress(j + 1, len(grid))
+        return release_energies(U, graph)[idx], UsL - U[idx]
+
+    # The sweeps of different σ are independent and their kernels release the GIL: run
+    # them on threads, fold the results in lattice order (deterministic ties).
+    workers = max(1, min(os.cpu_count() or 1, 8))
+    with ThreadPoolExecutor(workers) as pool:
+        for lo_j in range(0, len(grid), 4 * workers):
+            block = grid[lo_j: lo_j + 4 * workers]
+            for j, (sig, (R, UL)) in enumerate(zip(block, pool.map(sweep, block)), start=lo_j):
+                inside = (sig >= sigma_L) & (sig <= s0) if mode == "contracting" \
+                    else (sig >= s0) & (sig <= sigma_L)
+                Q = np.where(inside, np.minimum(R, UL), -np.inf)
+                better = Q > best_Q
+                best_Q = np.where(better, Q, best_Q)
+                best_s = np.where(better, sig, best_s)
+                best_UA = np.where(better, R, best_UA)
+                best_UL = np.where(better, UL, best_UL)
+                if progress is not None:
+                    progress(j + 1, len(grid))
     t["lattice_sweeps"] = time.perf_counter() - t0
     # Rank: quality descending, ties by pair order (stable).
     order = np.argsort(-best_Q, kind="stable")
