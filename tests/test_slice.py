@@ -140,13 +140,8 @@ def test_save_and_errors(lmesh, fingers, tmp_path):
 
 
 def _cli(argv):
-    from deformclosure.cli import check, slice as slice_cmd
-    from deformclosure.cli.main import cli, main
+    from deformclosure.cli.main import main
 
-    if "check" not in cli.commands:
-        cli.add_command(check.command, "check")
-    if "slice" not in cli.commands:
-        cli.add_command(slice_cmd.command, "slice")
     return main(argv)
 
 

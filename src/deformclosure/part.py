@@ -17,7 +17,6 @@ duplicate point and repeated consecutive points removed.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -268,16 +267,9 @@ class Part:
     @classmethod
     def from_file(cls, path: str | Path) -> "Part":
         """Read and validate a part file (JSON, SPEC §5)."""
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as err:
-            raise PartError(f"{path}: cannot read part file ({err.strerror})") from None
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as err:
-            raise PartError(f"{path}: not valid JSON ({err.msg} at line {err.lineno}); fix the syntax") from None
-        return cls.from_dict(data)
+        from .jsonfile import read_json
+
+        return cls.from_dict(read_json(path, PartError, "part file"))
 
     # ------------------------------------------------------------------ geometry
     @property

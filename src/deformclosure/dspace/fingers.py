@@ -507,16 +507,9 @@ def load_fingers(path: str | Path) -> tuple[Finger, ...]:
     FingerError
         Unreadable file, invalid JSON or invalid content (one-line message).
     """
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as err:
-        raise FingerError(f"{path}: cannot read the finger file ({err.strerror or err})") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise FingerError(f"{path}: not valid JSON (line {err.lineno} column {err.colno}: {err.msg})") from None
-    return fingers_from_dict(data, source=str(path))
+    from ..jsonfile import read_json
+
+    return fingers_from_dict(read_json(path, FingerError, "finger file"), source=str(path))
 
 
 def fingers_to_dict(fingers: Sequence[Finger], units: str = "m") -> dict:
