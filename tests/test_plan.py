@@ -84,8 +84,10 @@ def test_refined_top_pairs_are_exact_and_not_worse_than_lattice():
         ex = optimize_separation(mesh, r.jaws, method="exact", model=plan.model)
         assert r.quality == pytest.approx(ex.quality, rel=1e-12)
         i = next(j for j, p in enumerate(plan.pairs.tolist()) if sorted(p) == sorted(r.jaws))
-        # The exact supremum is never below a sampled value.
-        assert r.quality >= plan.quality[i] * (1 - 1e-9)
+        # The exact supremum is never below a sampled value; the plan reports it.
+        assert r.quality >= plan.lattice_quality[i] * (1 - 1e-9)
+        assert plan.exact[i] and plan.quality[i] == r.quality
+    assert np.all(np.diff(plan.quality) <= 0) and plan.exact[: len(plan.refined)].all()
 
 
 def test_filters_restrict_pairs():

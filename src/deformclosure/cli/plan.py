@@ -79,15 +79,10 @@ def command(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, unit
     s = 1.0 / length_scale(unit)
     click.echo(f"{len(res.pairs)} jaw pairs, ε = {res.epsilon:.3g} J on {res.n_sigma} σ values")
     click.echo(f"{'rank':>4} {'a':>6} {'b':>6} {'sigma* (' + unit + ')':>14} {'Q (J)':>12} {'method':>8}")
-    refined = {(r.jaws[0], r.jaws[1]): r for r in res.refined}
     for i in range(min(max(top, 5), len(res.pairs))):
         a, b = (int(v) for v in res.pairs[i])
-        r = refined.get((a, b))
-        if r is not None:
-            ss, q, meth = r.sigma_star, r.quality, "exact"
-        else:
-            ss = None if np.isnan(res.sigma_star[i]) else res.sigma_star[i]
-            q, meth = res.quality[i], "approx"
+        ss = None if np.isnan(res.sigma_star[i]) else res.sigma_star[i]
+        q, meth = res.quality[i], "exact" if res.exact[i] else "approx"
         sss = "-" if ss is None else f"{ss * s:.5g}"
         click.echo(f"{i + 1:>4} {a:>6} {b:>6} {sss:>14} {q:>12.5g} {meth:>8}")
     write_json(res.to_dict(), output)

@@ -50,9 +50,16 @@ class PlanResult:
         Rest distance (m), stiffness (N/m), strain per unit distance change (1/m) and
         elastic-limit separation (m) of each pair.
     sigma_star : ndarray, shape (P,)
-        ε-optimal separation (m), NaN where the pair cannot hold (Q ≡ 0 on the lattice).
+        ε-optimal separation (m), NaN where the pair cannot hold (Q ≡ 0 on the lattice);
+        the exact ``σ*`` for the refined pairs.
     quality, U_A, U_L : ndarray, shape (P,)
-        Q, release energy (``inf`` possible) and elastic margin at ``sigma_star`` (J).
+        Q, release energy (``inf`` possible) and elastic margin at ``sigma_star`` (J):
+        the lattice values, replaced by the exact ones for the ``top`` refined pairs
+        (whose exact optimum is never below their lattice value, so the order holds).
+    lattice_quality : ndarray, shape (P,)
+        Q on the shared lattice for every pair (J), refined or not.
+    exact : ndarray of bool, shape (P,)
+        The pair's values come from the exact method.
     pulls : ndarray of bool, shape (P,)
         The jaw line leaves the part at a jaw.
     epsilon, lipschitz, step : float
@@ -76,6 +83,8 @@ class PlanResult:
     U_A: np.ndarray
     U_L: np.ndarray
     pulls: np.ndarray
+    lattice_quality: np.ndarray
+    exact: np.ndarray
     epsilon: float
     lipschitz: float
     step: float
@@ -102,6 +111,8 @@ class PlanResult:
                 "sigma0": float(self.sigma0[i]), "k": float(self.k[i]),
                 "sigma_L": float(self.sigma_L[i]), "e_max": float(self.e_max[i]),
                 "pulls": bool(self.pulls[i]),
+                "method": "exact" if self.exact[i] else "approx-lattice",
+                "lattice_quality": float(self.lattice_quality[i]),
             })
         top = []
         for r in self.refined:
@@ -364,9 +375,25 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         refined.append(optimize_separation(mesh, (int(a), int(b)), method="exact", mode=mode,
                                            jaw_width=jaw_width, model=model))
     t["refine_exact"] = time.perf_counter() - t0
+    # Report the refined pairs' exact values (never below their lattice values), then
+    # re-rank: the refined pairs stay ahead of every unrefined one.
+    lattice_Q = best_Q[order]
+    Q, s_star = lattice_Q.copy(), best_s[order].copy()
+    UA, UL = best_UA[order].copy(), best_UL[order].copy()
+    exact = np.zeros(len(order), bool)
+    for i, r in enumerate(refined):
+        exact[i] = True
+        Q[i] = r.quality
+        s_star[i] = np.nan if r.sigma_star is None else r.sigma_star
+        sep = r.separation
+        UA[i] = math.inf if sep.U_A_infinite else (0.0 if sep.U_A is None else sep.U_A)
+        UL[i] = sep.U_L
+    rank = np.argsort(-Q, kind="stable")
+    sel = order[rank]
     return PlanResult(
-        pairs=graph.pairs[gi], sigma0=sigma0[gi], k=k[gi], e_max=e_max[order],
-        sigma_L=sigma_L[order], sigma_star=best_s[order], quality=best_Q[order],
-        U_A=best_UA[order], U_L=best_UL[order], pulls=model.pulls[gi], epsilon=float(eps),
+        pairs=graph.pairs[idx[sel]], sigma0=sigma0[idx[sel]], k=k[idx[sel]], e_max=e_max[sel],
+        sigma_L=sigma_L[sel], sigma_star=s_star[rank], quality=Q[rank],
+        U_A=UA[rank], U_L=UL[rank], pulls=model.pulls[idx[sel]],
+        lattice_quality=lattice_Q[rank], exact=exact[rank], epsilon=float(eps),
         lipschitz=lam, step=step, n_sigma=len(grid), refined=refined, mode=mode,
         jaw_width=float(jaw_width), timings=t, model=model)
