@@ -213,6 +213,9 @@ class ClosureResult:
             "contacts": [c.to_dict() for c in self.contacts],
             "certificate": None if self.twist is None else {"twist": [float(v) for v in self.twist]},
             "units": dict(UNITS),
+            # beyond the SPEC keys: where the twist is taken and how the equilibrium went
+            "centroid": [float(v) for v in self.centroid],
+            "equilibrium": {k: v for k, v in self.equilibrium.to_dict().items() if k != "units"},
         }
 
 
