@@ -62,8 +62,16 @@ def main(argv: list[str] | None = None) -> int:
     except click.exceptions.Abort:
         click.echo("aborted", err=True)
         return 130
+    except click.UsageError as err:
+        if type(err).__name__ == "NoArgsIsHelpError" and err.ctx is not None:
+            click.echo(err.ctx.get_help())  # bare `deformclosure`: show the help
+            return 0
+        # one line, like every other input error
+        where = err.ctx.command_path if err.ctx is not None else "deformclosure"
+        click.echo(f"error: {err.format_message()} (see '{where} --help')", err=True)
+        return 2
     except click.ClickException as err:
-        err.show()
+        click.echo(f"error: {err.format_message()}", err=True)
         return err.exit_code
     except click.exceptions.Exit as err:
         return err.exit_code

@@ -62,12 +62,15 @@ def command(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, unit
         except ValueError:
             raise GraspError(f"--region {r!r}: expected X0,Y0,X1,Y1 (four numbers)") from None
         boxes.append((x0, y0, x1, y1))
-    bar = None if quiet else tqdm(total=0, desc="σ lattice", unit="σ", leave=False)
+    bar = None  # created at the first lattice value, so input errors print no bar
 
     def progress(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.update(done - bar.n)
+        nonlocal bar
+        if quiet:
+            return
+        if bar is None:
+            bar = tqdm(total=total, desc="σ lattice", unit="σ", leave=False)
+        bar.update(done - bar.n)
 
     try:
         res = plan_grasps(mesh, eps=eps, mode="expanding" if expanding else "contracting",
