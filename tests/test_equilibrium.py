@@ -146,8 +146,8 @@ def test_equilibrium_converges_and_balances_on_random_polygons(seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_contact_forces_balance_on_random_cases(seed):
-    """Star-shaped parts pressed from four sides (some rotate by several degrees, where
-    the iteration may stop at its budget): the forces balance at every iterate."""
+    """Star-shaped parts pressed from four sides, several of which must turn by 5-16°
+    to balance: the iteration converges within its budget and the forces balance."""
     rng = np.random.default_rng(100 + seed)
     outer, fingers = _random_case(rng)
     mesh = make_mesh(outer, divisions=120)
@@ -161,8 +161,8 @@ def test_contact_forces_balance_on_random_cases(seed):
     arm = mesh.nodes - p
     m = np.sum(arm[:, 0] * res.nodal_forces[:, 1] - arm[:, 1] * res.nodal_forces[:, 0])
     assert abs(m) <= 1e-8 * scale * mesh.diameter
-    if res.converged:
-        assert np.all(res.gaps >= -max(res.tol, res.accuracy))
+    assert res.converged
+    assert np.all(res.gaps >= -max(res.tol, res.accuracy))
     assert res.energy > 0
     # the energy is that of the deformation (the rigid motion is exact, not linearised)
     assert res.energy == pytest.approx(0.5 * res.displacement.ravel() @ (stiffness_matrix(mesh) @ res.displacement.ravel()),

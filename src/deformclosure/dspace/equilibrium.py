@@ -459,8 +459,10 @@ def equilibrium(
             else:
                 new = contact_rows(bd, x, fingers, radius=float(search_radius), x_ref=xr, normals_ref=x0,
                                    feet_ref=x0)
-            # rows once linearised stay (re-measured): the set does not flip-flop
-            rows = merge_rows(new, refresh_rows(state["rows"], bd, x, fingers)) if k > 0 else new
+            # rows once linearised stay (re-measured), also across updates of the
+            # reference placement: the set does not flip-flop, and a turning part does
+            # not lose its contacts for a step (and jump) when the reference moves
+            rows = merge_rows(new, refresh_rows(state["rows"], bd, x, fingers))
             state["rows"] = rows
             r = len(rows)
             if r == 0:
