@@ -89,7 +89,7 @@ def main() -> None:
         else:
             ratio = "-"
         print(f"{len(mesh.outer_loop):>5} {model.graph.n_vertices:>7} {ex.separation.n_evaluations:>11} "
-              f"{t_ex:>9.3f} {str(pe):>11} {tp:>10.3f} {ratio:>11} {t_ap:>10.3f} "
+              f"{t_ex:>9.3f} {str(pe):>11} {('cap' if tp != tp else format(tp, '.3f')):>10} {ratio:>11} {t_ap:>10.3f} "
               f"{ap_.separation.n_evaluations:>12}")
 
     print("\n3) all k_ab of large parts (one factorisation + condensation)")
