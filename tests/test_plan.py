@@ -123,3 +123,17 @@ def test_cli_plan_report(tmp_path):
     assert r["units"]["energy"] == "J" and r["epsilon"] > 0
     assert (tmp_path / "plots" / "quality_map.png").exists()
     assert main(["plan", str(part), "--eps", "0"]) == 2
+
+
+def test_plan_is_thread_safe_and_deterministic():
+    """Several plans at once on threads (as jobs on one Dask worker run) give the same
+    ranking and qualities as one plan alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    mesh = _mesh("l_shape")
+    ref = plan_grasps(mesh, top=1, n_sigma=30)
+    with ThreadPoolExecutor(4) as pool:
+        runs = list(pool.map(lambda _: plan_grasps(mesh, top=1, n_sigma=30), range(4)))
+    for r in runs:
+        assert np.array_equal(r.pairs, ref.pairs)
+        assert np.array_equal(r.quality, ref.quality) and np.array_equal(r.e_max, ref.e_max)

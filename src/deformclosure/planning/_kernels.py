@@ -1,18 +1,21 @@
 """Numba kernel of the planner: the largest element strain of many jaw pairs.
 
-Private: :func:`deformclosure.planning.plan.pair_elastic_limits` prepares the inputs.
+Private: :func:`deformclosure.planning.plan.pair_elastic_limits` prepares the inputs and
+runs chunks of pairs on Python threads (the kernel releases the GIL). No numba
+``parallel=True``: its threading layers are either not thread-safe (workqueue) or not
+fork-safe (GNU OpenMP), and the planner runs inside Dask worker threads and forked pools.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 __all__ = ["max_strain_magnitude"]
 
 
-@njit(cache=True, parallel=True, fastmath=True)
-def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - compiled
+@njit(cache=True, nogil=True, fastmath=True)
+def max_strain_magnitude(T, ptr, pos, weight, ex, ey, lo, hi, out):  # pragma: no cover - compiled
     """``e_max`` of every pair: ``max_i |ε_i|`` with ``ε_i = Σ_j w_j T[P_j, :, i, :]·e``.
 
     Parameters
@@ -24,15 +27,14 @@ def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - com
         Pair ``s`` loads nodes ``pos[ptr[s]:ptr[s+1]]`` with forces ``weight`` (N per
         metre of approach) along its unit direction ``(ex[s], ey[s])``.
 
-    Returns
-    -------
-    float64 (n_pairs,)
-        Largest strain magnitude ``|½(εxx+εyy)| + √(¼(εxx−εyy)² + ¼γ²)`` (1/m).
+    lo, hi : int
+        Pairs ``lo … hi − 1`` are computed.
+    out : float64 (n_pairs,)
+        Receives the largest strain magnitude ``|½(εxx+εyy)| + √(¼(εxx−εyy)² + ¼γ²)``
+        (1/m) of each computed pair.
     """
-    n = len(ptr) - 1
     m = T.shape[1]
-    out = np.empty(n)
-    for s in prange(n):
+    for s in range(lo, hi):
         best = 0.0
         for i in range(m):
             exx = 0.0
@@ -49,4 +51,3 @@ def max_strain_magnitude(T, ptr, pos, weight, ex, ey):  # pragma: no cover - com
             if mag > best:
                 best = mag
         out[s] = best
-    return out

@@ -38,6 +38,16 @@ from ..units import SI_UNITS
 __all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice"]
 
 
+
+def _workers() -> int:
+    """Threads for the GIL-free kernels: the CPUs this process may use (at most 8)."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        n = os.cpu_count() or 1
+    return max(1, min(n, 8))
+
+
 @dataclass(frozen=True)
 class PlanResult:
     """Quality of every jaw pair, ranked (SI units).
@@ -200,8 +210,14 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     T = np.einsum("mij,mjr->rmi", B, X[tri_dofs]).reshape(q, 2, mesh.n_triangles, 3)
     T = T.transpose(0, 2, 1, 3).reshape(q, mesh.n_triangles, 6)
     del X
-    e_max = max_strain_magnitude(np.ascontiguousarray(T), ptr, pos.astype(np.int64),
-                                 weight, np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1]))
+    T = np.ascontiguousarray(T)
+    pos = pos.astype(np.int64)
+    ex, ey = np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1])
+    e_max = np.empty(len(pairs))
+    bounds = np.linspace(0, len(pairs), 8 * _workers() + 1).astype(np.int64)
+    with ThreadPoolExecutor(_workers()) as pool:  # the kernel releases the GIL
+        list(pool.map(lambda i: max_strain_magnitude(T, ptr, pos, weight, ex, ey, bounds[i],
+                                                     bounds[i + 1], e_max), range(len(bounds) - 1)))
     travel = elastic_limit_strain / e_max
     if model.mode == "contracting":
         sigma_L = np.maximum(0.0, sig0 - travel)
@@ -347,7 +363,7 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
 
     # The sweeps of different σ are independent and their kernels release the GIL: run
     # them on threads, fold the results in lattice order (deterministic ties).
-    workers = max(1, min(os.cpu_count() or 1, 8))
+    workers = _workers()
     with ThreadPoolExecutor(workers) as pool:
         for lo_j in range(0, len(grid), 4 * workers):
             block = grid[lo_j: lo_j + 4 * workers]
