@@ -288,6 +288,9 @@ def release_energies(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
         If ``U`` has the wrong length or non-finite values.
     """
     U = _check_energies(U, graph)
-    nmin = _neighbour_min(U, graph)
-    order = np.argsort(U, kind="stable")
+    nmin = _kernels.neighbour_min(graph.indptr, graph.indices, U)
+    # Any order of equal energies gives the same result: the components of the sublevel
+    # set {U <= L} after all vertices of level L are added do not depend on it, and every
+    # merge at level L assigns L − U[p]. So the faster unstable sort is fine.
+    order = np.argsort(U)
     return _kernels.release_sweep(graph.indptr, graph.indices, U, order, U <= nmin, U < nmin)

@@ -167,7 +167,7 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     max_bytes : float
         Memory allowed for ``T`` (bytes); a larger request raises ``GraspError``.
     """
-    from ._kernels import max_strain_magnitude
+    from ._kernels import max_strain_magnitude, max_strain_point_jaws
 
     mesh = model.mesh
     cc = model.condensed
@@ -206,18 +206,26 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     tri_dofs = np.empty((mesh.n_triangles, 6), dtype=np.int64)
     tri_dofs[:, 0::2] = 2 * mesh.triangles
     tri_dofs[:, 1::2] = 2 * mesh.triangles + 1
-    # T[P, i, 3c:3c+3] = strain of element i under a unit force at node P, direction c
-    T = np.einsum("mij,mjr->rmi", B, X[tri_dofs]).reshape(q, 2, mesh.n_triangles, 3)
-    T = T.transpose(0, 2, 1, 3).reshape(q, mesh.n_triangles, 6)
+    # T[P, 3c + j, i] = strain component j of element i under a unit force at node P,
+    # direction c (component-major: the kernels' inner loops run over elements)
+    T = np.einsum("mij,mjr->rim", B, X[tri_dofs]).reshape(q, 6, mesh.n_triangles)
     del X
     T = np.ascontiguousarray(T)
     pos = pos.astype(np.int64)
     ex, ey = np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1])
     e_max = np.empty(len(pairs))
     bounds = np.linspace(0, len(pairs), 8 * _workers() + 1).astype(np.int64)
-    with ThreadPoolExecutor(_workers()) as pool:  # the kernel releases the GIL
-        list(pool.map(lambda i: max_strain_magnitude(T, ptr, pos, weight, ex, ey, bounds[i],
-                                                     bounds[i + 1], e_max), range(len(bounds) - 1)))
+    if model.jaw_width:
+        def chunk(i: int) -> None:
+            max_strain_magnitude(T, ptr, pos, weight, ex, ey, bounds[i], bounds[i + 1], e_max)
+    else:
+        pa, pb = np.ascontiguousarray(pos[0::2]), np.ascontiguousarray(pos[1::2])
+        kk = np.ascontiguousarray(weight[0::2])
+
+        def chunk(i: int) -> None:
+            max_strain_point_jaws(T, pa, pb, kk, ex, ey, bounds[i], bounds[i + 1], e_max)
+    with ThreadPoolExecutor(_workers()) as pool:  # the kernels release the GIL
+        list(pool.map(chunk, range(len(bounds) - 1)))
     travel = elastic_limit_strain / e_max
     if model.mode == "contracting":
         sigma_L = np.maximum(0.0, sig0 - travel)
