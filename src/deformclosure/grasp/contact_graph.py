@@ -293,7 +293,8 @@ class ContactGraph:
         -------
         dict
             ``{"vertices": [{"a", "b", "sigma0", "k"[, "pulls"]}, ...],
-            "edges": [{"u": [a, b], "v": [a, c], "kinds": [...]}, ...]}``. Node ids are
+            "edges": [{"u": [a, b], "v": [a, c], "kinds": [...]}, ...], "units": {...}}``
+            (``sigma0`` in m, ``k`` in N/m). Node ids are
             mesh node ids; in each edge the node shared by both vertices (the jaw that
             stays put) is listed first. Non-finite numbers become ``None`` (JSON has no
             infinity).
@@ -332,7 +333,7 @@ class ContactGraph:
                 pw = [s, pw[1] if pw[0] == s else pw[0]]
             names = [name for bit, name in _KIND_NAMES if kind & bit]
             edges.append({"u": pu, "v": pw, "kinds": names})
-        return {"vertices": vertices, "edges": edges}
+        return {"vertices": vertices, "edges": edges, "units": {"length": "m", "stiffness": "N/m"}}
 
 
 # ---------------------------------------------------------------------------------------
