@@ -116,3 +116,23 @@ def test_bad_optimize_input_is_one_line_exit_2(tmp_path, args, pattern):
         assert len(lines) == 1 and lines[0].startswith("error:"), proc.stderr
         import re
         assert re.search(pattern, lines[0], re.I), lines[0]
+
+
+def test_approx_default_eps_bounds_the_number_of_samples(tmp_path):
+    """A small e_L makes the range σ0 − σ_L tiny against λ = max k σ0: the default ε is
+    raised to λ·|σ0 − σ_L| / 20 000 and the run completes (it once failed with
+    'needs 1558309 evaluations')."""
+    p = tmp_path / "stiff.json"
+    p.write_text(json.dumps({"units": "mm", "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
+                             "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
+                                          "elastic_limit_strain": 1e-4},
+                             "mesh": {"max_area": 4.0}}))
+    out = tmp_path / "r.json"
+    assert main(["optimize", str(p), "--at", "0,10", "12,10", "--method", "approx", "-o", str(out)]) == 0
+    r = json.loads(out.read_text())
+    span = r["sigma0"] - r["sigma_L"]
+    formula = 1e-3 * 0.5 * r["k01"] * span ** 2
+    raised = r["lipschitz"] * span / 20_000
+    assert raised > formula                      # the case this test is about
+    assert r["epsilon"] == pytest.approx(raised, rel=1e-12)
+    assert r["n_evaluations"] <= 20_000 + 1000

@@ -62,7 +62,8 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
 @click.option("--method", type=click.Choice(["exact", "approx", "paper"]), default="exact",
               show_default=True, help="exact: ours; paper: every crossing (reference); approx: ε-grid.")
 @click.option("--eps", type=float, default=None,
-              help="ε of --method approx, in joules (default 1e-3 · ½ k01 (σ0 − σ_L)², the pair squeezed to σ_L).")
+              help="ε of --method approx, in joules (default 1e-3 · ½ k01 (σ0 − σ_L)², the pair squeezed "
+                   "to σ_L, or larger if needed for at most 20 000 grid steps).")
 @click.option("--expanding", is_flag=True, help="Jaws push outward (e.g. from inside a hole).")
 @click.option("--jaw-width", type=float, default=0.0, show_default=True,
               help="Jaw contact width in --units (0 = point jaws).")

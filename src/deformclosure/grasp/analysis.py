@@ -204,14 +204,34 @@ class GraspAnalysis:
         return report
 
 
-def default_epsilon(limit: ElasticLimit) -> float:
-    """Default ε (J) of the approximate method: ``1e-3 · ½ k01 (σ0 − σ_L)²``.
+def default_epsilon(limit: ElasticLimit, sigma0: np.ndarray | None = None,
+                    k: np.ndarray | None = None, mode: str = "contracting",
+                    max_samples: int = 20_000) -> float:
+    """Default ε (J) of the approximate method.
 
-    The energy of the jaw pair squeezed to its elastic limit bounds ``U_L`` on the whole
-    range, hence ``Q``; a thousandth of it is a tolerance on the scale of the answer.
-    Falls back to ``1e-12`` J when the range is empty or not finite.
+    ``1e-3 · ½ k01 (σ0 − σ_L)²``: the energy of the jaw pair squeezed to its elastic limit
+    bounds ``U_L`` on the whole range, hence ``Q``; a thousandth of it is a tolerance on
+    the scale of the answer. When the grid step ``ξ = ε/λ`` this gives would need more
+    than ``max_samples`` samples over the range (a stiff pair far from its elastic
+    limit next to a small ``e_L``), ε is raised to ``λ·|σ0 − σ_L| / max_samples``, so the
+    default run always completes. Falls back to ``1e-12`` J for an empty range.
+
+    Parameters
+    ----------
+    limit : ElasticLimit
+    sigma0, k : ndarray, optional
+        Rest distances (m) and stiffnesses (N/m) of all graph vertices, for ``λ``.
+    mode : {"contracting", "expanding"}
+    max_samples : int
     """
-    e = 1e-3 * 0.5 * limit.k01 * (limit.sigma0 - limit.sigma_L) ** 2
+    span = abs(limit.sigma0 - limit.sigma_L)
+    e = 1e-3 * 0.5 * limit.k01 * span ** 2
+    if sigma0 is not None and k is not None and span > 0:
+        if mode == "contracting":
+            lam = float(np.max(k * np.abs(sigma0)))
+        else:
+            lam = float(np.max(k * np.maximum(limit.sigma_L - sigma0, 0.0)))
+        e = max(e, lam * span / max_samples)
     return float(e) if np.isfinite(e) and e > 0 else 1e-12
 
 
@@ -237,11 +257,11 @@ def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = 
         ``"paper"``: every pairwise crossing (reference, small parts only);
         ``"approx"``: the paper's ε-approximation on a grid, ``eps`` in J.
     eps : float, optional
-        Tolerance (J) of ``"approx"``. Default: ``1e-3 · ½ k01 (σ0 − σ_L)²``, a
-        thousandth of the energy the jaw pair stores when squeezed to the elastic limit
-        (an upper bound of ``Q*`` up to the U_A cap, so ε is relative to the scale of
-        the answer); the value used is reported as ``epsilon``. When ``σ_L = σ0`` (no
-        room to squeeze) a default of ``1e-12`` J is used.
+        Tolerance (J) of ``"approx"``. Default (:func:`default_epsilon`):
+        ``1e-3 · ½ k01 (σ0 − σ_L)²``, a thousandth of the energy the jaw pair stores
+        when squeezed to the elastic limit (an upper bound of ``Q*``), raised if needed
+        so that at most 20 000 grid steps cover the range; the value used is reported
+        as ``epsilon``.
     mode : {"contracting", "expanding"}
     jaw_width : float
         Jaw contact width (m).
@@ -272,7 +292,7 @@ def optimize_separation(mesh, jaws: tuple[int, int], *, K: sp.spmatrix | None = 
     limit = elastic_limit(mesh, model.condensed, n0, n1, mode=mode, jaw_width=jaw_width)
     t["elastic_limit"] = time.perf_counter() - t0
     if method == "approx" and eps is None:
-        eps = default_epsilon(limit)
+        eps = default_epsilon(limit, model.stiffness.sigma0, model.stiffness.k, mode)
     t0 = time.perf_counter()
     sep = optimize_separation_arrays(model.stiffness.sigma0, model.stiffness.k, model.graph,
                                      start, limit.sigma_L, mode=mode, method=method, eps=eps,
