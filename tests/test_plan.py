@@ -137,3 +137,9 @@ def test_plan_is_thread_safe_and_deterministic():
     for r in runs:
         assert np.array_equal(r.pairs, ref.pairs)
         assert np.array_equal(r.quality, ref.quality) and np.array_equal(r.e_max, ref.e_max)
+
+
+def test_tiny_eps_is_refused_not_run_for_hours():
+    mesh = _mesh("rectangle")
+    with pytest.raises(GraspError, match="lattice values"):
+        plan_grasps(mesh, eps=1e-15, top=0)

@@ -275,7 +275,7 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
                 mode: str = "contracting", jaw_width: float = 0.0,
                 separation_range: tuple[float, float] | None = None,
                 regions: Sequence[Any] | None = None, top: int = 10,
-                n_sigma: int = 400, progress: Callable[[int, int], None] | None = None,
+                n_sigma: int = 400, max_sigma: int = 200_000, progress: Callable[[int, int], None] | None = None,
                 model: GraspModel | None = None) -> PlanResult:
     """Rank every jaw pair of a part by its ε-optimal quality.
 
@@ -300,6 +300,9 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         Number of best pairs refined with the exact method.
     n_sigma : int
         Lattice size used to choose the default ε.
+    max_sigma : int
+        Largest lattice accepted (a tiny ``eps`` raises ``GraspError`` instead of
+        running for hours).
     progress : callable, optional
         Called as ``progress(done, total)`` after each lattice value.
     model : GraspModel, optional
@@ -355,6 +358,11 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     if eps is None:
         eps = lam * max(hi - lo, 1e-300) / max(int(n_sigma), 1)
     step = eps / lam
+    n_grid = math.floor(hi / step + 1e-9) - math.ceil(lo / step - 1e-9) + 1
+    if n_grid > max_sigma:
+        raise GraspError(f"eps = {eps:.3g} J needs {n_grid} lattice values of σ (step {step:.3g} m), "
+                         f"more than max_sigma = {max_sigma}; use a larger eps (default: about "
+                         f"{n_sigma} values)")
     grid = lattice(lo, hi, step)
     best_Q = np.zeros(len(idx))
     best_s = np.full(len(idx), np.nan)
