@@ -92,6 +92,9 @@ def _random_case(rng):
         if kind == 0:
             fingers.append(DiscFinger(tuple(p + (0.01 - d) * u), 0.01))
         elif kind == 1:
+            # a flat jaw on the support line of the part in direction u (a jaw through
+            # ``p`` would cut deep into any corner sticking out beyond it)
+            p = outer[int(np.argmax(outer @ u))]
             fingers.append(HalfPlaneFinger(tuple(p - d * u), tuple(-u)))
         elif kind == 2:
             t = np.array([-u[1], u[0]])

@@ -61,6 +61,7 @@ import numpy as np
 
 from ..errors import DeformClosureError
 from .fingers import Finger
+from .placement import check_finger_placement
 from .obstacles import BoundaryModel, ContactRows, contact_rows, merge_rows, refresh_rows, touch_tolerance
 
 __all__ = ["EquilibriumResult", "equilibrium", "area_centroid"]
@@ -366,6 +367,7 @@ def equilibrium(
     tol: float | None = None,
     max_iter: int = 50,
     search_radius: float | None = None,
+    check_placement: bool = True,
 ) -> EquilibriumResult:
     """Frictionless contact equilibrium of the free part between fixed fingers.
 
@@ -385,6 +387,9 @@ def equilibrium(
     search_radius : float, optional
         Contact conditions are linearised for gaps below this (m); default
         ``max(0.02 L, 3 x deepest penetration)`` with ``L`` the diameter.
+    check_placement : bool
+        Refuse fingers that start deep inside the part
+        (:func:`~deformclosure.dspace.placement.check_finger_placement`).
 
     Returns
     -------
@@ -405,6 +410,8 @@ def equilibrium(
     Gopalakrishnan & Goldberg (2005), §3.3.
     """
     fingers = list(fingers)
+    if check_placement:
+        check_finger_placement(mesh, fingers)
     x0 = np.asarray(mesh.nodes, dtype=float)
     n = len(x0)
     L = float(mesh.diameter)
