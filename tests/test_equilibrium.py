@@ -44,6 +44,7 @@ def test_uniaxial_squeeze_between_parallel_jaws(plane, d):
     assert res.forces[1] == pytest.approx([-F, 0.0], rel=1e-9, abs=1e-12 * F)
     assert res.active.all() and np.all(res.gaps >= -res.tol)
     assert res.energy == pytest.approx(linear_energy(mesh, res.q), rel=1e-12)
+    assert res.max_strain == pytest.approx(d / W, rel=1e-9)     # uniform compression d/W
     # the jaw faces are flat: every left-edge node at x = d/2 exactly
     left = np.flatnonzero(np.isclose(mesh.nodes[:, 0], 0.0))
     assert np.allclose(res.q[left, 0], d / 2, atol=1e-12)

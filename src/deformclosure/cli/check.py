@@ -88,6 +88,11 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None) -
     for c in res.contacts:
         click.echo(f"  finger {c.finger}: {'active' if c.active else 'inactive'}, {c.feature}, "
                    f"force ({c.force[0]:.4g}, {c.force[1]:.4g}) N")
+    mat = getattr(mesh, "material", None)
+    if mat is not None and eq.max_strain > mat.elastic_limit_strain:
+        click.echo(f"warning: the largest strain at equilibrium, {eq.max_strain:.3g}, exceeds the elastic "
+                   f"limit e_L = {mat.elastic_limit_strain:g}: the fingers squeeze the part beyond its "
+                   "elastic range (and beyond the small-displacement model)", err=True)
     if res.twist is not None:
         t = res.twist
         click.echo(f"escaping twist: v = ({t[0]:.4g}, {t[1]:.4g}) m/s, omega = {t[2]:.4g} rad/s "

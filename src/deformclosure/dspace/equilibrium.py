@@ -60,6 +60,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..elasticity.strain import strain_magnitude
 from .fingers import Finger
 from .placement import check_finger_placement
 from .obstacles import BoundaryModel, ContactRows, contact_rows, merge_rows, refresh_rows, touch_tolerance
@@ -123,6 +124,9 @@ class EquilibriumResult:
         Steps and rigid placement settled (see module notes) and no penetration.
     tol : float
         Touching tolerance used (m).
+    max_strain : float
+        Largest element strain magnitude of the elastic deformation (-), to compare
+        with the material's elastic-limit strain ``e_L``.
     accuracy : float
         Convergence threshold (m): ``max(1e-9 L, 1e-6 x`` the largest elastic
         displacement``)``. A converged equilibrium moved less than this in its last
@@ -147,6 +151,7 @@ class EquilibriumResult:
     converged: bool
     tol: float
     accuracy: float
+    max_strain: float
     rows: ContactRows = field(repr=False)
     multipliers: np.ndarray = field(repr=False)
 
@@ -158,6 +163,7 @@ class EquilibriumResult:
             "iterations": int(self.iterations),
             "converged": bool(self.converged),
             "accuracy": float(self.accuracy),
+            "max_strain": float(self.max_strain),
             "rotation": float(self.rotation),
             "translation": [float(v) for v in self.translation],
             "forces": self.forces.tolist(),
@@ -610,6 +616,6 @@ def equilibrium(
         q=x, displacement=X, rotation=float(rig[2] / L), translation=rig[:2].copy(), forces=forces,
         moments=moments, points=points, nodal_forces=nodal, gaps=gaps, active=active, energy=energy,
         centroid=area_centroid(mesh.triangles, x), iterations=it, converged=converged, tol=tol,
-        accuracy=_accuracy(X), rows=rows,
+        accuracy=_accuracy(X), max_strain=float(strain_magnitude(mesh, Xf).max(initial=0.0)), rows=rows,
         multipliers=lam,
     )
