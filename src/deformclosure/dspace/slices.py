@@ -109,7 +109,7 @@ class SliceResult:
         np.savez_compressed(
             path, node=self.node, xs=self.xs, ys=self.ys, free=self.free, in_dt=self.in_dt,
             obstacles=self.obstacles, energy=self.energy, energy_kind=self.energy_kind, q=self.q,
-            units=json.dumps(UNITS),
+            base_position=self.q[self.node], units=json.dumps(UNITS),
         )
 
 
