@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import json
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal, Sequence, Union
@@ -67,7 +68,7 @@ def _as_points(points: Any) -> np.ndarray:
     return p
 
 
-class Finger:
+class Finger(ABC):
     """Base class of the rigid finger bodies (all lengths in metres).
 
     Subclasses provide vectorised geometric queries on arrays of points of shape
@@ -95,18 +96,21 @@ class Finger:
         """Whether the body has a non-empty interior (all fingers but the point)."""
         return True
 
-    def signed_distance(self, points: Any) -> np.ndarray:  # pragma: no cover
-        raise NotImplementedError
+    @abstractmethod
+    def signed_distance(self, points: Any) -> np.ndarray:
+        """Distance (m) of ``points (..., 2)`` from the body, negative inside."""
 
-    def outward_normal(self, points: Any) -> np.ndarray:  # pragma: no cover
-        raise NotImplementedError
+    @abstractmethod
+    def outward_normal(self, points: Any) -> np.ndarray:
+        """Unit gradient of :meth:`signed_distance` at ``points (..., 2)``."""
 
     def probe_point(self) -> np.ndarray | None:
         """A point in the interior of the body (``None`` for a half-plane)."""
         return None
 
-    def to_dict(self, scale: float = 1.0) -> dict:  # pragma: no cover
-        raise NotImplementedError
+    @abstractmethod
+    def to_dict(self, scale: float = 1.0) -> dict:
+        """The finger-file entry, lengths divided by ``scale`` (m per file unit)."""
 
 
 @dataclass(frozen=True)
