@@ -211,7 +211,6 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     T = np.einsum("mij,mjr->rim", B, X[tri_dofs]).reshape(q, 6, mesh.n_triangles)
     del X
     T = np.ascontiguousarray(T)
-    pos = pos.astype(np.int64)
     ex, ey = np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1])
     e_max = np.empty(len(pairs))
     bounds = np.linspace(0, len(pairs), 8 * _workers() + 1).astype(np.int64)
@@ -242,10 +241,16 @@ def _wide_forces(model: GraspModel, pairs: np.ndarray):
     return np.array(sets, dtype=object), np.array(lam, dtype=object)
 
 
-def lattice(lo: float, hi: float, step: float) -> np.ndarray:
-    """The ε-grid ``σ_j = j·step`` (m) inside ``[lo, hi]`` (paper §4.7)."""
+def lattice(lo: float, hi: float, step: float, max_size: int | None = None) -> np.ndarray:
+    """The ε-grid ``σ_j = j·step`` (m) inside ``[lo, hi]`` (paper §4.7).
+
+    Raises ``GraspError`` when it would hold more than ``max_size`` values.
+    """
     j0 = math.ceil(lo / step - 1e-9)
     j1 = math.floor(hi / step + 1e-9)
+    if max_size is not None and j1 - j0 + 1 > max_size:
+        raise GraspError(f"the step {step:.3g} m needs {j1 - j0 + 1} lattice values of σ, more than "
+                         f"{max_size}; use a larger eps")
     return np.arange(j0, j1 + 1) * step
 
 
@@ -358,12 +363,7 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     if eps is None:
         eps = lam * max(hi - lo, 1e-300) / max(int(n_sigma), 1)
     step = eps / lam
-    n_grid = math.floor(hi / step + 1e-9) - math.ceil(lo / step - 1e-9) + 1
-    if n_grid > max_sigma:
-        raise GraspError(f"eps = {eps:.3g} J needs {n_grid} lattice values of σ (step {step:.3g} m), "
-                         f"more than max_sigma = {max_sigma}; use a larger eps (default: about "
-                         f"{n_sigma} values)")
-    grid = lattice(lo, hi, step)
+    grid = lattice(lo, hi, step, max_size=max_sigma)
     best_Q = np.zeros(len(idx))
     best_s = np.full(len(idx), np.nan)
     best_UA = np.zeros(len(idx))
@@ -372,6 +372,8 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     kk = k[idx]
     UsL = 0.5 * kk * (s0 - sigma_L) ** 2                # U_s(σ_L) per pair (J)
     t0 = time.perf_counter()
+
+    range_lo, range_hi = (sigma_L, s0) if mode == "contracting" else (s0, sigma_L)
 
     def sweep(sig: float) -> tuple[np.ndarray, np.ndarray]:
         U = vertex_energies(sig, sigma0, k, mode)
@@ -384,9 +386,7 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         for lo_j in range(0, len(grid), 4 * workers):
             block = grid[lo_j: lo_j + 4 * workers]
             for j, (sig, (R, UL)) in enumerate(zip(block, pool.map(sweep, block)), start=lo_j):
-                inside = (sig >= sigma_L) & (sig <= s0) if mode == "contracting" \
-                    else (sig >= s0) & (sig <= sigma_L)
-                Q = np.where(inside, np.minimum(R, UL), -np.inf)
+                Q = np.where((sig >= range_lo) & (sig <= range_hi), np.minimum(R, UL), -np.inf)
                 better = Q > best_Q
                 best_Q = np.where(better, Q, best_Q)
                 best_s = np.where(better, sig, best_s)
