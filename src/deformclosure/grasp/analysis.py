@@ -21,7 +21,7 @@ from ..units import SI_UNITS
 from .contact_graph import ContactGraph, contact_graph, pulling_pairs
 from .elastic_limit import ElasticLimit, elastic_limit
 from .pair_stiffness import PairStiffness, pair_stiffness
-from .separation import SeparationResult, optimize_separation_arrays, vertex_energies
+from .separation import SeparationResult, lipschitz_constant, optimize_separation_arrays, vertex_energies
 
 __all__ = ["GraspModel", "GraspAnalysis", "grasp_model", "optimize_separation", "MODES",
            "METHODS", "check_jaws"]
@@ -227,11 +227,7 @@ def default_epsilon(limit: ElasticLimit, sigma0: np.ndarray | None = None,
     span = abs(limit.sigma0 - limit.sigma_L)
     e = 1e-3 * 0.5 * limit.k01 * span ** 2
     if sigma0 is not None and k is not None and span > 0:
-        if mode == "contracting":
-            lam = float(np.max(k * np.abs(sigma0)))
-        else:
-            lam = float(np.max(k * np.maximum(limit.sigma_L - sigma0, 0.0)))
-        e = max(e, lam * span / max_samples)
+        e = max(e, lipschitz_constant(sigma0, k, limit.sigma_L, mode) * span / max_samples)
     return float(e) if np.isfinite(e) and e > 0 else 1e-12
 
 

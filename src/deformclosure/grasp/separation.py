@@ -77,6 +77,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "SeparationResult",
     "optimize_separation_arrays",
+    "lipschitz_constant",
     "quality_at",
     "vertex_energies",
     "METHODS",
@@ -675,6 +676,16 @@ def _approx(P: _Problem, eps: float, lam: float, max_samples: int, grid: str):
 # --------------------------------------------------------------------------- public
 
 
+def lipschitz_constant(sigma0: np.ndarray, k: np.ndarray, sigma_L: float,
+                       mode: str = "contracting") -> float:
+    """``λ`` (N) of paper §4.7: a bound on ``|dU_v/dσ| = k_v |σ0_v − σ|`` of every vertex
+    over the range — ``max k σ0`` (contracting, σ ≥ 0) or ``max k (σ_L − σ0)⁺``
+    (expanding, σ ≤ σ_L)."""
+    if mode == "contracting":
+        return float(np.max(k * np.abs(sigma0)))
+    return float(np.max(k * np.maximum(sigma_L - sigma0, 0.0)))
+
+
 def optimize_separation_arrays(
     sigma0: np.ndarray,
     k: np.ndarray,
@@ -814,12 +825,8 @@ def optimize_separation_arrays(
 
     lam = xi = None
     if method == "approx":
-        if lipschitz is not None:
-            lam = float(lipschitz)
-        elif mode == "contracting":
-            lam = float(np.max(P.k * np.abs(sigma0_arr)))
-        else:
-            lam = float(np.max(P.k * np.maximum(float(sigma_L) - sigma0_arr, 0.0)))
+        lam = float(lipschitz) if lipschitz is not None else \
+            lipschitz_constant(sigma0_arr, P.k, float(sigma_L), mode)
         ends, evals, xi, n_static = _approx(P, eps, lam, int(max_samples), grid)
         best = None
         for e in evals:

@@ -32,7 +32,7 @@ from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.release import release_energies
-from ..grasp.separation import vertex_energies
+from ..grasp.separation import lipschitz_constant, vertex_energies
 from ..units import SI_UNITS
 
 __all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice"]
@@ -356,10 +356,9 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     # U_A = U_w − U_s and of U_L, over the whole range.
     if mode == "contracting":
         lo, hi = float(sigma_L.min()), float(sigma0[idx].max())
-        lam = float(np.max(k * sigma0))
     else:
         lo, hi = float(sigma0[idx].min()), float(sigma_L.max())
-        lam = float(np.max(k * np.maximum(hi - sigma0, 0.0)))
+    lam = lipschitz_constant(sigma0, k, hi, mode)
     if eps is None:
         eps = lam * max(hi - lo, 1e-300) / max(int(n_sigma), 1)
     step = eps / lam
