@@ -54,9 +54,10 @@ class _MaterialModel(BaseModel):
     thickness: float = 1.0
     elastic_limit_strain: float
     plane: Literal["stress", "strain"] = "stress"
+    critical_distance: float | None = None
 
     @field_validator("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain",
-                     mode="before")
+                     "critical_distance", mode="before")
     @classmethod
     def _int_to_float(cls, v: Any) -> Any:
         if isinstance(v, int) and not isinstance(v, bool):
@@ -149,6 +150,10 @@ class Material:
         absolute in-plane principal strain of an element.
     plane : {"stress", "strain"}
         Plane stress (thin sheet, default) or plane strain (long prism).
+    critical_distance : float or None
+        Radius ``ℓ`` (m) of the disc over which strains are averaged before they are
+        compared with ``e_L`` by the pad model (SPEC §6, theory of critical distances);
+        ``None``: 2 % of the part's diameter.
     """
 
     youngs_modulus: float
@@ -156,20 +161,28 @@ class Material:
     thickness: float
     elastic_limit_strain: float
     plane: str = "stress"
+    critical_distance: float | None = None
 
     def __post_init__(self) -> None:
         _check_material(self.youngs_modulus, self.poisson_ratio, self.thickness,
                         self.elastic_limit_strain, self.plane, prefix="material")
+        cd = self.critical_distance
+        if cd is not None and not (math.isfinite(cd) and cd >= 0):
+            raise PartError(f"material.critical_distance = {cd!r}: must be a finite length >= 0 "
+                            "in the part's units (or omit it for 2 % of the part's diameter)")
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict in SI units (thickness in m)."""
-        return {
+        """JSON-ready dict in SI units (thickness and critical distance in m)."""
+        d = {
             "youngs_modulus": self.youngs_modulus,
             "poisson_ratio": self.poisson_ratio,
             "thickness": self.thickness,
             "elastic_limit_strain": self.elastic_limit_strain,
             "plane": self.plane,
         }
+        if self.critical_distance is not None:
+            d["critical_distance"] = self.critical_distance
+        return d
 
 
 def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
@@ -258,8 +271,13 @@ class Part:
         mat = model.material
         _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
                         mat.elastic_limit_strain, mat.plane, prefix="material")
+        if mat.critical_distance is not None and not (
+                math.isfinite(mat.critical_distance) and mat.critical_distance >= 0):
+            raise PartError(f"material.critical_distance = {mat.critical_distance!r}: must be a "
+                            "finite length >= 0 in the part's units (or omit it)")
+        cd = None if mat.critical_distance is None else mat.critical_distance * scale
         material = Material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
-                            mat.elastic_limit_strain, mat.plane)
+                            mat.elastic_limit_strain, mat.plane, cd)
         outer, holes = _validate_geometry(outer, holes)
         opts = _validate_mesh_options(model.mesh, scale, outer, holes)
         return cls(model.name, model.units, outer, holes, material, opts)

@@ -89,18 +89,23 @@ def mesh_from_dict(data: Any) -> Mesh:
         m = data["material"]
         if not isinstance(m, dict):
             raise MeshError("material: must be an object")
-        keys = {"youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain", "plane"}
+        keys = {"youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain", "plane",
+                "critical_distance"}
         if set(m) - keys:
             raise MeshError(f"material.{sorted(set(m) - keys)[0]}: unknown key; remove it")
-        missing = keys - {"plane"} - set(m)
+        missing = keys - {"plane", "critical_distance"} - set(m)
         if missing:
             raise MeshError(f"material.{sorted(missing)[0]}: required field is missing; add it")
         try:
             vals = [m[k] for k in ("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain")]
             if not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in vals):
                 raise MeshError("material: values must be numbers")
+            cd = m.get("critical_distance")
+            if cd is not None and (not isinstance(cd, (int, float)) or isinstance(cd, bool)):
+                raise MeshError("material.critical_distance: must be a number (m)")
             material = Material(float(vals[0]), float(vals[1]), float(vals[2]) * scale,
-                                float(vals[3]), m.get("plane", "stress"))
+                                float(vals[3]), m.get("plane", "stress"),
+                                None if cd is None else float(cd) * scale)
         except PartError as err:
             raise MeshError(str(err)) from None
     mesh = Mesh.from_arrays(nodes, tris_raw, material=material, name=str(data.get("name", "part")))

@@ -1,0 +1,235 @@
+"""Frictionless contact of two rigid pads with an elastic part, on the condensed boundary
+compliance (SPEC §6).
+
+At a fixed grasp axis the part's rotation and its translation across the axis are those
+of the axis — in the area-weighted least-squares sense, ``Σ wᵢ n·uᵢ = 0`` and
+``Σ wᵢ (pᵢ − c) × uᵢ = 0`` with lumped nodal areas ``wᵢ`` and area centroid ``c`` — and it
+floats along the axis. The energy of a load ``f`` on the part so constrained is
+``½ fᵀ Y f`` with the constrained compliance ``Y = Pᵀ Z P``: ``Z`` is the compliance with
+three DOFs pinned (one factorisation of ``K``) and ``P = I − M R (Rᵀ M R)⁻¹ Rᵀ`` moves the
+load's rigid part onto the area-weighted reaction (``R``: rigid modes about ``c``, ``M``:
+nodal areas). Constraining the mean axial translation too is harmless, since the contact
+problem carries the part's axial float as its own unknown ``t``. Only boundary DOFs are
+loaded, so ``Y`` is needed on the boundary only: it follows from the boundary block of
+``Z`` (the condensed compliance) and three extra solves.
+
+Gaps are measured along the axis to the pad's surface ``d(x)`` (see
+:mod:`deformclosure.pads.geometry`) and linearised in the part's displacement only:
+``g_A = s − z_A + d(x) + (a + d'(x) n)·u``, ``g_B = z_B + d(x) − s + (−a + d'(x) n)·u``, so
+each contact force is along the pad's normal there. The pad positions enter additively,
+hence the energy is exactly piecewise quadratic in the separation σ.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..elasticity.condense import CondensedCompliance
+from ..elasticity.solve import rigid_modes
+from ..elasticity.stiffness import stiffness_matrix
+from .geometry import FirstTouch, GraspAxis, Pad, first_touch
+from .homotopy import ContactPath, trace_contact_path
+
+__all__ = ["PadContact", "GraspCurve", "nodal_areas"]
+
+
+def nodal_areas(mesh) -> np.ndarray:
+    """Lumped nodal areas (m²): one third of each adjacent triangle's area, shape (n,)."""
+    w = np.zeros(mesh.n_nodes)
+    np.add.at(w, mesh.triangles.ravel(), np.repeat(mesh.areas / 3.0, 3))
+    return w
+
+
+@dataclass(frozen=True)
+class GraspCurve:
+    """Energy of one grasp axis as an exact piecewise quadratic in the separation σ.
+
+    Attributes
+    ----------
+    axis : GraspAxis
+    pad : Pad
+    touch : FirstTouch or None
+        ``None`` when the pads miss the part (energy 0 at every σ).
+    nodes : ndarray of int, shape (m,)
+        Candidate contact nodes (a node may appear once per pad).
+    pad_of : ndarray of int, shape (m,)
+        0 for pad A, 1 for pad B.
+    normals : ndarray, shape (m, 2)
+        Gap gradients (force direction on the part per unit multiplier).
+    path : ContactPath
+        Multipliers against the squeeze ``δ = σ0 − σ``.
+    """
+
+    axis: GraspAxis
+    pad: Pad
+    touch: FirstTouch | None
+    nodes: np.ndarray
+    pad_of: np.ndarray
+    normals: np.ndarray
+    path: ContactPath | None
+
+    @property
+    def sigma0(self) -> float:
+        """Closing width at first touch (m); ``nan`` if the pads miss the part."""
+        return self.touch.sigma0 if self.touch is not None else float("nan")
+
+    @property
+    def sigma_min(self) -> float:
+        """Smallest separation (m) the curve is traced to."""
+        if self.path is None:
+            return -np.inf
+        return self.sigma0 - float(self.path.delta[-1])
+
+    def energy(self, sigma: np.ndarray | float) -> np.ndarray:
+        """Energy (J) at separations ``sigma`` (m)."""
+        sigma = np.asarray(sigma, float)
+        if self.path is None:
+            return np.zeros_like(sigma)
+        return self.path.energy(self.sigma0 - sigma)
+
+    def kinks(self) -> np.ndarray:
+        """Separations (m) where the active contact set changes, decreasing."""
+        if self.path is None:
+            return np.zeros(0)
+        return self.sigma0 - self.path.delta
+
+    def forces(self, sigma: float) -> np.ndarray:
+        """Contact forces on the part (N), shape (m, 2), at separation ``sigma`` (m)."""
+        if self.path is None:
+            return np.zeros((0, 2))
+        lam = self.path.multipliers(self.sigma0 - sigma)
+        return lam[:, None] * self.normals
+
+    def axial_force(self, sigma: float) -> float:
+        """Squeezing force (N) of each pad along the axis at ``sigma`` (m)."""
+        if self.path is None:
+            return 0.0
+        lam = self.path.multipliers(self.sigma0 - sigma)
+        return float(lam[self.pad_of == 0].sum())
+
+
+class PadContact:
+    """One factorisation of a part's stiffness; grasp energies for any axis and pad.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    K : sparse matrix, optional
+        Stiffness (N/m); default the mesh's CST stiffness.
+    """
+
+    def __init__(self, mesh, K: sp.spmatrix | None = None) -> None:
+        self.mesh = mesh
+        K = stiffness_matrix(mesh) if K is None else K
+        nodes = mesh.nodes
+        self.boundary = mesh.perimeter_nodes
+        self.cc = CondensedCompliance(K, nodes, mesh.triangles, self.boundary)
+        w = nodal_areas(mesh)
+        self.centroid = (w[:, None] * nodes).sum(0) / w.sum()
+        R = rigid_modes(nodes - self.centroid)
+        MR = np.repeat(w, 2)[:, None] * R
+        H = np.linalg.inv(R.T @ MR)
+        ZMR = self.cc.solve(MR)
+        bd = np.column_stack([2 * self.boundary, 2 * self.boundary + 1]).ravel()
+        Rb, ZMRb = R[bd], ZMR[bd]
+        A = Rb @ H
+        # Y_bb = Z_bb − (ZMR)_b H R_bᵀ − R_b H (ZMR)_bᵀ + R_b H (MR)ᵀ Z MR H R_bᵀ
+        T = ZMRb @ A.T
+        Y = self.cc.C - T - T.T + A @ (MR.T @ ZMR) @ A.T
+        self.Y = 0.5 * (Y + Y.T)
+        self._R, self._MR, self._H = R, MR, H
+        self.diameter = mesh.diameter
+        self._ring = nodes[mesh.outer_loop]
+
+    def load_vector(self, curve: GraspCurve, lam: np.ndarray) -> np.ndarray:
+        """Global load vector (N), shape (2n,), of multipliers ``lam`` on ``curve``'s contacts."""
+        f = np.zeros(2 * self.mesh.n_nodes)
+        F = lam[:, None] * curve.normals
+        np.add.at(f, 2 * curve.nodes, F[:, 0])
+        np.add.at(f, 2 * curve.nodes + 1, F[:, 1])
+        return f
+
+    def displacement(self, f: np.ndarray) -> np.ndarray:
+        """Displacement ``Y f`` (m) of the axis-constrained part under loads ``f`` (N).
+
+        ``f`` may be ``(2n,)`` or ``(2n, r)``.
+        """
+        R, MR, H = self._R, self._MR, self._H
+        fp = f - MR @ (H @ (R.T @ f))
+        v = self.cc.solve(fp)
+        return v - R @ (H @ (MR.T @ v))
+
+    def curve(self, axis: GraspAxis, pad: Pad, sigma_min: float) -> GraspCurve:
+        """The exact energy curve of ``axis`` from first touch down to ``sigma_min`` (m)."""
+        touch = first_touch(self._ring, axis, pad)
+        if touch is None:
+            return GraspCurve(axis, pad, None, np.zeros(0, int), np.zeros(0, int),
+                              np.zeros((0, 2)), None)
+        delta_max = max(touch.sigma0 - sigma_min, 0.0)
+        loop = self.mesh.outer_loop
+        s, x = axis.coordinates(self.mesh.nodes[loop])
+        d, slope = pad.profile(x)
+        inside = np.isfinite(d)
+        a, n = axis.direction, axis.normal
+        gA = s - touch.z_a + d
+        gB = touch.z_b + d - s
+        tol = 1e-10 * self.diameter
+        # Contacts that could close within the squeeze; verified afterwards.
+        cutoff = 2.0 * delta_max + tol
+        for _ in range(6):
+            selA = np.flatnonzero(inside & (gA <= cutoff))
+            selB = np.flatnonzero(inside & (gB <= cutoff))
+            nodes = np.concatenate([loop[selA], loop[selB]])
+            pad_of = np.concatenate([np.zeros(len(selA), int), np.ones(len(selB), int)])
+            sl = np.concatenate([slope[selA], slope[selB]])
+            sgn = np.where(pad_of == 0, 1.0, -1.0)
+            normals = sgn[:, None] * a[None, :] + sl[:, None] * n[None, :]
+            g0 = np.concatenate([gA[selA], gB[selB]])
+            W = self._delassus(nodes, normals)
+            path = trace_contact_path(W, g0, pad_of.astype(float), sgn, delta_max, gap_tol=tol)
+            curve = GraspCurve(axis, pad, touch, nodes, pad_of, normals, path)
+            missed = self._penetrations(curve, loop, s, d, slope, inside, touch, tol)
+            if missed <= cutoff:
+                return curve
+            cutoff = 2.0 * missed
+        return curve
+
+    def _delassus(self, nodes: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        pos = self.cc.position(nodes)
+        dx, dy = 2 * pos, 2 * pos + 1
+        Y = self.Y
+        gx, gy = normals[:, 0], normals[:, 1]
+        W = (np.outer(gx, gx) * Y[np.ix_(dx, dx)] + np.outer(gx, gy) * Y[np.ix_(dx, dy)]
+             + np.outer(gy, gx) * Y[np.ix_(dy, dx)] + np.outer(gy, gy) * Y[np.ix_(dy, dy)])
+        return 0.5 * (W + W.T)
+
+    def _penetrations(self, curve: GraspCurve, loop, s, d, slope, inside, touch, tol) -> float:
+        """Largest rest gap (m) of an excluded node that the traced path makes penetrate."""
+        path = curve.path
+        if path is None or len(path.delta) < 2:
+            return 0.0
+        pos_c = self.cc.position(curve.nodes)
+        cd = np.column_stack([2 * pos_c, 2 * pos_c + 1]).ravel()
+        pos_l = self.cc.position(loop)
+        ld = np.column_stack([2 * pos_l, 2 * pos_l + 1]).ravel()
+        Fc = (path.lam[:, :, None] * curve.normals[None]).reshape(len(path.delta), -1)
+        u = (Fc @ self.Y[np.ix_(cd, ld)]).reshape(len(path.delta), len(loop), 2)
+        a, n = curve.axis.direction, curve.axis.normal
+        ua, un = u @ a, u @ n
+        sl = np.where(inside, slope, 0.0)
+        dd = np.where(inside, d, 0.0)
+        D = path.delta[:, None]
+        t = path.t[:, None]
+        gA = s - touch.z_a + dd + ua + sl * un + t
+        gB = touch.z_b - D + dd - s - ua + sl * un - t
+        worst = 0.0
+        for g, rest, p in ((gA, s - touch.z_a + dd, 0), (gB, touch.z_b + dd - s, 1)):
+            used = np.zeros(len(loop), bool)
+            used[np.isin(loop, curve.nodes[curve.pad_of == p])] = True
+            bad = inside & ~used & (g.min(axis=0) < -tol)
+            if bad.any():
+                worst = max(worst, float(rest[bad].max()))
+        return worst

@@ -1,0 +1,208 @@
+"""Pads and grasp axes: the gripper's geometry in the part frame (SPEC §6).
+
+A *pad* is a rigid capsule: a flat face of width ``W`` perpendicular to the closing axis
+with rounded ends of radius ``ρ`` (``W = 0``: a round fingertip). Its front surface, seen
+from the part, is a height function of the cross-axis coordinate ``x``::
+
+    d(x) = 0                                   |x| ≤ W/2
+    d(x) = ρ − sqrt(ρ² − (|x| − W/2)²)         W/2 < |x| < W/2 + ρ
+
+and the pad cannot touch points with ``|x| ≥ W/2 + ρ``. A *grasp axis* is a line in the
+part frame: angle ``θ`` of the closing direction ``a = (cos θ, sin θ)`` and signed offset
+``c`` of the line from the reference point along ``n = (−sin θ, cos θ)``. Pad A approaches
+along ``+a`` from ``s = −∞`` and occupies ``s ≤ z_A − d(x)``; pad B approaches along
+``−a`` and occupies ``s ≥ z_B + d(x)``; the separation is ``σ = z_B − z_A``.
+
+The first touch of each pad with the part's outer ring is found exactly, edge by edge:
+along an edge ``s`` is linear and ``d`` convex in the edge parameter, so the minimum of
+``s + d(x)`` is at an end, at ``|x| = W/2``, or where the slope of ``d`` equals the edge's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import GraspError
+
+__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch"]
+
+
+@dataclass(frozen=True)
+class Pad:
+    """A rigid pad: flat face of width ``width`` (m) with rounded ends of ``radius`` (m)."""
+
+    width: float
+    radius: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.width) and self.width >= 0):
+            raise GraspError(f"pad width = {self.width!r}: must be a finite length >= 0 "
+                             "(0 = round fingertip)")
+        if not (np.isfinite(self.radius) and self.radius > 0):
+            raise GraspError(f"pad radius = {self.radius!r}: must be a finite length > 0")
+
+    @property
+    def half_span(self) -> float:
+        """Largest ``|x|`` (m) the pad can touch: ``W/2 + ρ``."""
+        return 0.5 * self.width + self.radius
+
+    def profile(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Surface height ``d(x)`` (m) and slope ``d'(x)``; ``inf`` where the pad cannot touch.
+
+        Parameters
+        ----------
+        x : ndarray
+            Cross-axis coordinates relative to the axis (m).
+        """
+        x = np.asarray(x, float)
+        xi = np.abs(x) - 0.5 * self.width
+        inside = np.abs(x) < self.half_span
+        xi_c = np.clip(xi, 0.0, None)
+        root = np.sqrt(np.clip(self.radius**2 - xi_c**2, 0.0, None))
+        d = np.where(inside, self.radius - root, np.inf)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = np.where(inside & (xi > 0), np.sign(x) * xi_c / root, 0.0)
+        return d, np.where(inside, slope, np.inf)
+
+    def to_dict(self) -> dict[str, float]:
+        """``{"width", "radius"}`` in m."""
+        return {"width": float(self.width), "radius": float(self.radius)}
+
+
+@dataclass(frozen=True)
+class GraspAxis:
+    """A closing axis: angle ``angle`` (rad) and offset ``offset`` (m) from ``origin``.
+
+    The axis is the line ``{p : n·(p − origin) = offset}`` traversed along
+    ``a = (cos angle, sin angle)``. ``(angle + π, −offset)`` is the same line with the
+    pads' roles exchanged.
+    """
+
+    angle: float
+    offset: float
+    origin: tuple[float, float] = (0.0, 0.0)
+
+    @classmethod
+    def through(cls, p: np.ndarray, q: np.ndarray, origin=(0.0, 0.0)) -> "GraspAxis":
+        """The axis through points ``p`` and ``q`` (m), closing direction ``p → q``."""
+        p, q = np.asarray(p, float), np.asarray(q, float)
+        d = q - p
+        if not np.all(np.isfinite(d)) or np.hypot(*d) == 0:
+            raise GraspError("--at: the two points must be distinct and finite")
+        ang = float(np.arctan2(d[1], d[0]))
+        return cls.at(p, ang, origin)
+
+    @classmethod
+    def at(cls, point: np.ndarray, angle: float, origin=(0.0, 0.0)) -> "GraspAxis":
+        """The axis through ``point`` (m) with closing direction ``angle`` (rad)."""
+        n = np.array([-np.sin(angle), np.cos(angle)])
+        o = np.asarray(origin, float)
+        return cls(float(angle), float(n @ (np.asarray(point, float) - o)), (float(o[0]), float(o[1])))
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Closing direction ``a`` (unit)."""
+        return np.array([np.cos(self.angle), np.sin(self.angle)])
+
+    @property
+    def normal(self) -> np.ndarray:
+        """Cross-axis direction ``n`` (unit)."""
+        return np.array([-np.sin(self.angle), np.cos(self.angle)])
+
+    @property
+    def point(self) -> np.ndarray:
+        """The axis' point nearest the origin (m)."""
+        return np.asarray(self.origin) + self.offset * self.normal
+
+    def coordinates(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Axial ``s`` and cross-axis ``x`` coordinates (m) of points ``P`` (k, 2)."""
+        P = np.asarray(P, float) - np.asarray(self.origin)
+        return P @ self.direction, P @ self.normal - self.offset
+
+    def to_dict(self) -> dict:
+        """``{"point": [x, y], "angle"}`` (m, rad)."""
+        return {"point": [float(v) for v in self.point], "angle": float(self.angle)}
+
+
+@dataclass(frozen=True)
+class FirstTouch:
+    """Where the pads first touch the part when closing along an axis (rest geometry).
+
+    Attributes
+    ----------
+    z_a, z_b : float
+        Face positions (m, along the axis) of pads A and B at first touch.
+    contact_a, contact_b : ndarray, shape (2,)
+        Rest contact points (m): the middle of the touching set of each pad.
+    """
+
+    z_a: float
+    z_b: float
+    contact_a: np.ndarray
+    contact_b: np.ndarray
+
+    @property
+    def sigma0(self) -> float:
+        """Closing width at first touch (m)."""
+        return self.z_b - self.z_a
+
+
+def _edge_minima(s0, s1, x0, x1, pad: Pad, tol: float):
+    """Minimum of ``s + d(x)`` along each edge and the argmin points' ``(s, x)``."""
+    ds, dx = s1 - s0, x1 - x0
+    h, r = 0.5 * pad.width, pad.radius
+    with np.errstate(divide="ignore", invalid="ignore"):
+        m = -ds / dx                     # d'(x) at a stationary point of s + d
+        xi = np.abs(m) * r / np.sqrt(1.0 + m * m)
+        cand_x = np.stack([x0, x1, np.full_like(x0, -h), np.full_like(x0, h),
+                           np.where(m > 0, h + xi, np.nan), np.where(m < 0, -h - xi, np.nan)], 1)
+        tau = (cand_x - x0[:, None]) / dx[:, None]
+    tau[:, :2] = [0.0, 1.0]
+    vertical = np.abs(dx) <= tol
+    tau[vertical, 2:] = np.nan
+    ok = np.isfinite(tau) & (tau >= 0) & (tau <= 1)
+    tau = np.where(ok, tau, 0.0)
+    xs = x0[:, None] + tau * dx[:, None]
+    ss = s0[:, None] + tau * ds[:, None]
+    d, _ = pad.profile(xs)
+    f = np.where(ok, ss + d, np.inf)
+    return f, ss, xs
+
+
+def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad) -> FirstTouch | None:
+    """Exact first touch of both pads with a closed ring (the part's outer boundary).
+
+    Parameters
+    ----------
+    ring : ndarray, shape (k, 2)
+        Outer ring of the part (m), not closed.
+    axis : GraspAxis
+    pad : Pad
+
+    Returns
+    -------
+    FirstTouch or None
+        ``None`` when the pads miss the part (no boundary point within ``W/2 + ρ`` of the
+        axis).
+    """
+    ring = np.asarray(ring, float)
+    s, x = axis.coordinates(ring)
+    s1, x1 = np.roll(s, -1), np.roll(x, -1)
+    scale = float(np.ptp(ring, axis=0).max())
+    tol = 1e-9 * scale
+    out = []
+    for sign in (1.0, -1.0):   # pad A minimises s + d(x); pad B maximises s − d(x)
+        f, ss, xs = _edge_minima(sign * s, sign * s1, x, x1, pad, tol)
+        best = float(f.min())
+        if not np.isfinite(best):
+            return None
+        near = f <= best + tol
+        xs_t = xs[near]
+        xm = 0.5 * (xs_t.min() + xs_t.max())
+        sm = sign * best - sign * float(pad.profile(np.array([xm]))[0][0])
+        out.append((sign * best, np.asarray(axis.origin) + sm * axis.direction
+                    + (xm + axis.offset) * axis.normal))
+    (za, pa), (zb, pb) = out
+    return FirstTouch(za, zb, pa, pb)
