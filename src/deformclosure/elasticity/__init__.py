@@ -1,5 +1,7 @@
 """Linear elasticity of CST meshes: stiffness, strains, free-body solves, external K."""
 
+from .critical_distance import (averaged_strain_magnitude, averaged_strains, averaging_operator,
+                                default_critical_distance)
 from .external import check_stiffness, read_stiffness
 from .solve import FreeBodySolver, pinned_dofs, rigid_modes
 from .stiffness import (assemble, constitutive_matrix, element_b_matrices, element_stiffness,
@@ -10,5 +12,6 @@ __all__ = [
     "stiffness_matrix", "constitutive_matrix", "element_b_matrices", "element_stiffness",
     "assemble", "element_strains", "element_stresses", "principal_strains",
     "strain_magnitude", "FreeBodySolver", "rigid_modes", "pinned_dofs", "read_stiffness",
-    "check_stiffness",
+    "check_stiffness", "default_critical_distance", "averaging_operator", "averaged_strains",
+    "averaged_strain_magnitude",
 ]

@@ -58,9 +58,9 @@ class GraspCurve:
     pad_of : ndarray of int, shape (m,)
         0 for pad A, 1 for pad B.
     normals : ndarray, shape (m, 2)
-        Gap gradients (force direction on the part per unit multiplier).
+        Unit contact normals (direction of each contact force on the part).
     path : ContactPath
-        Multipliers against the squeeze ``δ = σ0 − σ``.
+        Normal-force magnitudes (N) against the squeeze ``δ = σ0 − σ``.
     """
 
     axis: GraspAxis
@@ -108,7 +108,8 @@ class GraspCurve:
         if self.path is None:
             return 0.0
         lam = self.path.multipliers(self.sigma0 - sigma)
-        return float(lam[self.pad_of == 0].sum())
+        on_a = self.pad_of == 0
+        return float(lam[on_a] @ (self.normals[on_a] @ self.axis.direction))
 
 
 class PadContact:
@@ -186,10 +187,14 @@ class PadContact:
             pad_of = np.concatenate([np.zeros(len(selA), int), np.ones(len(selB), int)])
             sl = np.concatenate([slope[selA], slope[selB]])
             sgn = np.where(pad_of == 0, 1.0, -1.0)
-            normals = sgn[:, None] * a[None, :] + sl[:, None] * n[None, :]
-            g0 = np.concatenate([gA[selA], gB[selB]])
+            grad = sgn[:, None] * a[None, :] + sl[:, None] * n[None, :]
+            # Rows scaled to unit gradient: multipliers become normal-force magnitudes (N)
+            # and steep pad flanks (d' → ∞ at |x| → W/2 + ρ) stay well conditioned.
+            norm = np.hypot(grad[:, 0], grad[:, 1])
+            normals = grad / norm[:, None]
+            g0 = np.concatenate([gA[selA], gB[selB]]) / norm
             W = self._delassus(nodes, normals)
-            path = trace_contact_path(W, g0, pad_of.astype(float), sgn, delta_max, gap_tol=tol)
+            path = trace_contact_path(W, g0, pad_of / norm, sgn / norm, delta_max, gap_tol=tol)
             curve = GraspCurve(axis, pad, touch, nodes, pad_of, normals, path)
             missed = self._penetrations(curve, loop, s, d, slope, inside, touch, tol)
             if missed <= cutoff:

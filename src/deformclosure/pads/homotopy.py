@@ -110,9 +110,11 @@ def trace_contact_path(W: np.ndarray, g0: np.ndarray, b: np.ndarray, e: np.ndarr
     g0 : ndarray, shape (m,)
         Rest gaps (m) with pad A at its first-touch position and no squeeze.
     b : ndarray, shape (m,)
-        1 for the contacts of pad B (whose gaps shrink by ``δ``), 0 for pad A.
+        Rate at which each gap shrinks with ``δ`` (> 0 for the contacts of pad B, 0 for
+        pad A).
     e : ndarray, shape (m,)
-        +1 for pad A's contacts, −1 for pad B's (effect of the part's axial translation).
+        Rate at which each gap grows with the part's axial translation (> 0 for pad A's
+        contacts, < 0 for pad B's).
     delta_max : float
         Largest squeeze to trace (m).
     gap_tol : float
@@ -123,12 +125,13 @@ def trace_contact_path(W: np.ndarray, g0: np.ndarray, b: np.ndarray, e: np.ndarr
     ContactPath
     """
     m = len(g0)
-    ga, gb = g0[e > 0], g0[e < 0]
-    if len(ga) == 0 or len(gb) == 0:
+    A, B = e > 0, e < 0
+    if not A.any() or not B.any():
         empty = np.array([np.inf])
         return ContactPath(empty, np.zeros((1, m)), np.zeros(1), np.zeros((0, 3)))
-    t = -float(ga.min())
-    delta = float(ga.min() + gb.min())
+    # First touch on the nodes: translate until pad A touches, squeeze until B does.
+    t = -float(np.min(g0[A] / e[A]))
+    delta = float(np.min((g0[B] + e[B] * t) / b[B]))
     lam = np.zeros(m)
     deltas, lams, ts = [delta], [lam.copy()], [t]
     for _ in range(max_pieces):
@@ -144,7 +147,7 @@ def trace_contact_path(W: np.ndarray, g0: np.ndarray, b: np.ndarray, e: np.ndarr
         dlam[J] = x
         # dt from the contacts that stay closed: (W x)_i + e_i dt = b_i.
         on = J[(strong[J]) | (x > 1e-12 * max(np.abs(x).max(), 1e-300))]
-        r = (b - W @ dlam)[on] * e[on]
+        r = (b - W @ dlam)[on] / e[on]
         dt = float(np.mean(r)) if len(on) else 0.0
         dg = W @ dlam + e * dt - b
         steps = [delta_max - delta]
