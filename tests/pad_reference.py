@@ -16,7 +16,8 @@ node ``p``: ``s = a·p``, ``x = n·p - offset``. Pad profile ``d(x)`` is 0 on th
     gA_i = s_i - zA + d(x_i) + ( a + d'(x_i) n)·u_i >= 0
     gB_i = zB + d(x_i) - s_i + (-a + d'(x_i) n)·u_i >= 0
 
-Candidates are the outer-loop nodes with ``|x| < W/2 + ρ``. ``zA = zA0 = min(s + d)`` over
+Candidates are the outer-loop nodes with ``|x| < W/2 + ρ sin 75°`` (contact enforced where
+the surface is within 75° of the face, as the package does). ``zA = zA0 = min(s + d)`` over
 the candidates, ``σ0 = max(s - d) - zA0``. Placement: with lumped nodal areas ``w_i`` and
 their centroid ``c``, ``Σ w_i n·u_i = 0`` and ``Σ w_i (p_i - c) × u_i = 0``; the mean axial
 translation is free. Minimise ``½ uᵀ K u``.
@@ -156,7 +157,9 @@ def reference_pad_solution(mesh, angle: float, offset: float, width: float, radi
     x_all = nodes @ nv - offset
 
     outer = np.asarray(mesh.loops[0], np.int64)
-    reach = 0.5 * width + radius
+    # Contact is enforced where the pad surface is within 75° of its face (SPEC §6 as
+    # implemented; see deformclosure.pads.geometry): |x| < W/2 + ρ sin 75°.
+    reach = 0.5 * width + radius * np.sin(np.radians(75.0))
     cand = outer[np.abs(x_all[outer]) < reach]
     if len(cand) == 0:
         raise ValueError("the axis misses the part: no outer-boundary node within reach of the pads")

@@ -7,7 +7,12 @@ from the part, is a height function of the cross-axis coordinate ``x``::
     d(x) = 0                                   |x| ≤ W/2
     d(x) = ρ − sqrt(ρ² − (|x| − W/2)²)         W/2 < |x| < W/2 + ρ
 
-and the pad cannot touch points with ``|x| ≥ W/2 + ρ``. A *grasp axis* is a line in the
+and the pad cannot touch points with ``|x| ≥ W/2 + ρ``. Contact is *enforced* only where
+the surface is at most :data:`FLANK_ANGLE` (75°) from the face, ``|x| < W/2 + ρ sin 75°``:
+on the steeper flanks the gap, linearised along the axis, has slope ``d' → ∞`` and would
+pin a node sideways as soon as the node comes within reach (a jump of the energy as the
+axis moves, not a property of the pad); reaching there needs an indentation of
+``ρ (1 − cos 75°) ≈ 0.74 ρ`` beyond the face. A *grasp axis* is a line in the
 part frame: angle ``θ`` of the closing direction ``a = (cos θ, sin θ)`` and signed offset
 ``c`` of the line from the reference point along ``n = (−sin θ, cos θ)``. Pad A approaches
 along ``+a`` from ``s = −∞`` and occupies ``s ≤ z_A − d(x)``; pad B approaches along
@@ -26,7 +31,10 @@ import numpy as np
 
 from ..errors import GraspError
 
-__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch"]
+__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "FLANK_ANGLE"]
+
+#: Steepest surface angle (rad, from the face) where pad contact is enforced.
+FLANK_ANGLE = np.radians(75.0)
 
 
 @dataclass(frozen=True)
@@ -48,17 +56,25 @@ class Pad:
         """Largest ``|x|`` (m) the pad can touch: ``W/2 + ρ``."""
         return 0.5 * self.width + self.radius
 
-    def profile(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Surface height ``d(x)`` (m) and slope ``d'(x)``; ``inf`` where the pad cannot touch.
+    @property
+    def reach(self) -> float:
+        """Largest ``|x|`` (m) where contact is enforced: ``W/2 + ρ sin(FLANK_ANGLE)``."""
+        return 0.5 * self.width + self.radius * float(np.sin(FLANK_ANGLE))
+
+    def profile(self, x: np.ndarray, capped: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Surface height ``d(x)`` (m) and slope ``d'(x)``; ``inf`` outside the pad.
 
         Parameters
         ----------
         x : ndarray
             Cross-axis coordinates relative to the axis (m).
+        capped : bool
+            Only the contact range ``|x| < reach`` (True) or the whole capsule
+            ``|x| < W/2 + ρ`` (False, for the rest geometry).
         """
         x = np.asarray(x, float)
         xi = np.abs(x) - 0.5 * self.width
-        inside = np.abs(x) < self.half_span
+        inside = np.abs(x) < (self.reach if capped else self.half_span)
         xi_c = np.clip(xi, 0.0, None)
         root = np.sqrt(np.clip(self.radius**2 - xi_c**2, 0.0, None))
         d = np.where(inside, self.radius - root, np.inf)
@@ -166,7 +182,7 @@ def _edge_minima(s0, s1, x0, x1, pad: Pad, tol: float):
     tau = np.where(ok, tau, 0.0)
     xs = x0[:, None] + tau * dx[:, None]
     ss = s0[:, None] + tau * ds[:, None]
-    d, _ = pad.profile(xs)
+    d, _ = pad.profile(xs, capped=False)
     f = np.where(ok, ss + d, np.inf)
     return f, ss, xs
 
@@ -201,7 +217,7 @@ def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad) -> FirstTouch | Non
         near = f <= best + tol
         xs_t = xs[near]
         xm = 0.5 * (xs_t.min() + xs_t.max())
-        sm = sign * best - sign * float(pad.profile(np.array([xm]))[0][0])
+        sm = sign * best - sign * float(pad.profile(np.array([xm]), capped=False)[0][0])
         out.append((sign * best, np.asarray(axis.origin) + sm * axis.direction
                     + (xm + axis.offset) * axis.normal))
     (za, pa), (zb, pb) = out

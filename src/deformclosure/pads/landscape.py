@@ -1,0 +1,228 @@
+"""The release landscape of a two-pad grasp over grasp axes (SPEC §6).
+
+The part moves relative to the gripper by sliding across the closing axis and turning:
+the vertices of the landscape are grasp axes on a ``(θ, c)`` grid whose spacing follows
+the part's size (``Δθ = π / n_angles``, ``Δc = D / n_offsets`` with ``D`` the diameter),
+never the mesh; neighbours are grid neighbours, and ``θ`` is periodic with
+``(θ + π, −c)`` the same axis. At a gripper separation ``σ`` every axis has the energy of
+its own contact problem; the release energy ``U_A`` is the minimax barrier from the start
+axis to another equilibrium (an axis whose energy no neighbour undercuts, e.g. one where
+the pads miss the part), exactly as SPEC §4 defines it on the contact graph.
+
+Energies are computed lazily, only for the axes a search reaches, and cached as whole
+exact curves ``U(σ)``.
+
+**Noise floor.** On an unstructured mesh the energy of an axis jitters as the axis moves
+relative to the nodes; a continuum solution does not. Energy differences below
+``noise`` (J) are not resolved: a start axis is a strict minimum only if every neighbour
+is higher by more than ``noise``, and an axis counts as an equilibrium if no neighbour is
+lower by more than ``noise``; :mod:`.noise` measures it. Energy differences the mesh
+cannot resolve are thus ties, and a tie is not a hold: like a translation along parallel
+edges (SPEC §3), a neutral direction lets a frictionless part slide.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .contact import GraspCurve, PadContact
+from .geometry import GraspAxis, Pad
+
+__all__ = ["AxisGrid", "Landscape", "Release"]
+
+
+@dataclass(frozen=True)
+class AxisGrid:
+    """A ``(θ, c)`` grid of axes anchored at a start axis; ``c`` about ``origin``.
+
+    Vertex ``(i, j)`` is the axis ``θ_i = angle0 + i Δθ``, ``c_j = offset0 + j Δc`` for
+    ``0 ≤ i < n_angles`` and ``j_min ≤ j ≤ j_max``; ``Δc`` is chosen so that the grid is
+    closed under ``(θ + π, −c)`` (``2·offset0/Δc`` is an integer ``wrap``).
+    """
+
+    angle0: float
+    offset0: float
+    d_angle: float
+    d_offset: float
+    n_angles: int
+    j_min: int
+    j_max: int
+    wrap: int
+    origin: tuple[float, float]
+
+    @classmethod
+    def around(cls, start: GraspAxis, reach: float, diameter: float, n_angles: int = 48,
+               n_offsets: int = 50) -> "AxisGrid":
+        """Grid through ``start`` covering offsets up to ``reach`` (m) from the origin."""
+        dc = diameter / n_offsets
+        wrap = int(round(2 * start.offset / dc))
+        if wrap != 0:
+            dc = 2 * start.offset / wrap
+        j_max = int(math.ceil((reach - start.offset) / dc)) + 1
+        j_min = -j_max - wrap
+        return cls(start.angle, start.offset, math.pi / n_angles, dc, n_angles, j_min, j_max,
+                   wrap, start.origin)
+
+    @property
+    def n_offsets(self) -> int:
+        """Number of offsets per angle."""
+        return self.j_max - self.j_min + 1
+
+    @property
+    def size(self) -> int:
+        """Number of vertices."""
+        return self.n_angles * self.n_offsets
+
+    def vertex(self, i: int, j: int) -> int:
+        """Vertex id of grid cell ``(i, j)``."""
+        return i * self.n_offsets + (j - self.j_min)
+
+    def cell(self, v: int) -> tuple[int, int]:
+        """Grid cell ``(i, j)`` of vertex ``v``."""
+        i, r = divmod(v, self.n_offsets)
+        return i, r + self.j_min
+
+    def axis(self, v: int) -> GraspAxis:
+        """The grasp axis of vertex ``v``."""
+        i, j = self.cell(v)
+        return GraspAxis(self.angle0 + i * self.d_angle, self.offset0 + j * self.d_offset,
+                         self.origin)
+
+    def neighbours(self, v: int) -> list[int]:
+        """Grid neighbours (±Δθ with the periodic wrap, ±Δc)."""
+        i, j = self.cell(v)
+        out = []
+        if j > self.j_min:
+            out.append(self.vertex(i, j - 1))
+        if j < self.j_max:
+            out.append(self.vertex(i, j + 1))
+        for di in (-1, 1):
+            ii = i + di
+            jj = j
+            if ii < 0:
+                ii, jj = self.n_angles - 1, -j - self.wrap
+            elif ii >= self.n_angles:
+                ii, jj = 0, -j - self.wrap
+            out.append(self.vertex(ii, jj))
+        return out
+
+
+@dataclass(frozen=True)
+class Release:
+    """Release of the start axis at one separation.
+
+    Attributes
+    ----------
+    U_A : float
+        Release energy (J); ``inf`` if no other equilibrium is reachable.
+    strict : bool
+        Whether the start is a strict minimum beyond the noise floor.
+    saddle : int or None
+        Vertex holding the barrier's maximum energy.
+    path : list of int
+        Minimax path, start first, ending at another equilibrium (empty if not strict).
+    """
+
+    U_A: float
+    strict: bool
+    saddle: int | None
+    path: list[int]
+
+
+class Landscape:
+    """Lazily evaluated grasp energies over an :class:`AxisGrid`.
+
+    Parameters
+    ----------
+    solver : PadContact
+    pad : Pad
+    grid : AxisGrid
+    sigma_min : float
+        Smallest separation (m) any query will use; curves are traced down to it.
+    """
+
+    def __init__(self, solver: PadContact, pad: Pad, grid: AxisGrid, sigma_min: float) -> None:
+        self.solver, self.pad, self.grid, self.sigma_min = solver, pad, grid, sigma_min
+        self._curves: dict[int, GraspCurve] = {}
+        self.twin: "Landscape | None" = None
+        self._measured: list[int] = []
+        self.noise_factor = 3.0
+
+    def measure_noise(self) -> bool:
+        """Solve every axis visited so far on the twin realisation; True if any was new."""
+        new = [v for v in self._curves if v not in set(self._measured)]
+        for v in new:
+            self.twin.curve(v)
+        self._measured.extend(new)
+        return bool(new)
+
+    def noise(self, sigma: float) -> float:
+        """Noise floor (J) at ``sigma`` (m): ``noise_factor`` × the largest difference
+        between the two realisations' energies over the axes measured so far."""
+        if self.twin is None:
+            return 0.0
+        if not self._measured:
+            self.measure_noise()
+        return self.noise_factor * max(abs(self.energy(v, sigma) - self.twin.energy(v, sigma))
+                                       for v in self._measured)
+
+    def curve(self, v: int) -> GraspCurve:
+        """The exact energy curve of vertex ``v`` (computed once)."""
+        c = self._curves.get(v)
+        if c is None:
+            c = self.solver.curve(self.grid.axis(v), self.pad, self.sigma_min)
+            self._curves[v] = c
+        return c
+
+    @property
+    def n_evaluated(self) -> int:
+        """Number of axes whose contact problem has been solved."""
+        return len(self._curves)
+
+    def energy(self, v: int, sigma: float) -> float:
+        """Energy (J) of vertex ``v`` at separation ``sigma`` (m)."""
+        return float(self.curve(v).energy(sigma))
+
+    def release(self, start: int, sigma: float, noise: float = 0.0) -> Release:
+        """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid)."""
+        g = self.grid
+        E: dict[int, float] = {}
+
+        def U(v: int) -> float:
+            if v not in E:
+                E[v] = self.energy(v, sigma)
+            return E[v]
+
+        Us = U(start)
+        if min(U(w) for w in g.neighbours(start)) <= Us + noise:
+            return Release(0.0, False, None, [])
+        best = {start: Us}
+        parent: dict[int, int] = {}
+        count = itertools.count()
+        heap = [(Us, next(count), start)]
+        while heap:
+            b, _, v = heapq.heappop(heap)
+            if b > best.get(v, math.inf):
+                continue
+            nbrs = g.neighbours(v)
+            if v != start and U(v) <= min(U(w) for w in nbrs) + noise:
+                path = [v]
+                while path[-1] != start:
+                    path.append(parent[path[-1]])
+                path.reverse()
+                if b - Us <= noise:      # a barrier the mesh cannot resolve is a tie
+                    return Release(0.0, False, None, [])
+                saddle = max(path, key=U)
+                return Release(b - Us, True, saddle, path)
+            for w in nbrs:
+                nb = max(b, U(w))
+                if nb < best.get(w, math.inf):
+                    best[w] = nb
+                    parent[w] = v
+                    heapq.heappush(heap, (nb, next(count), w))
+        return Release(math.inf, True, None, [])

@@ -1,0 +1,327 @@
+"""Optimal separation of a two-pad grasp: ``σ* = argmax min(U_A, U_L)`` (SPEC §6).
+
+``U_A(σ)`` is the minimax barrier on the axis landscape (:mod:`.landscape`), ``U_L(σ) =
+U(σ_L) − U(σ)`` with ``σ_L`` from the critical-distance strain (:mod:`.limit`). Every
+vertex energy is an exact piecewise quadratic in σ, so between two separations where the
+escape runs over the same saddle axis ``w``, ``U_A = U_w − U_s`` is piecewise quadratic
+with the kinks of ``U_w`` and ``U_s``; on each such piece ``Q`` is maximised in closed form
+(ends, stationary points, crossings of ``U_A`` with ``U_L``) and the candidate is then
+checked against ``U_A`` evaluated by its definition. Where the saddle changes, the
+interval is bisected to ``1e-9 σ0``. This is §4's exact algorithm carried over to curves
+with several pieces; ``U_A`` can jump where the saddle or the set of equilibria changes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import GraspError
+from .contact import GraspCurve, PadContact
+from .geometry import GraspAxis, Pad
+from .landscape import AxisGrid, Landscape, Release
+from .noise import jitter_noise, realisation_noise
+from .limit import PadLimit, critical_distance_of, pad_elastic_limit
+
+__all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
+
+UNITS = {"length": "m", "energy": "J", "stiffness": "N/m", "strain_per_length": "1/m",
+         "angle": "rad", "force": "N"}
+
+
+@dataclass(frozen=True, eq=False)
+class PadGraspResult:
+    """Optimal separation of one pad grasp (SPEC §6 report). SI units.
+
+    Attributes
+    ----------
+    axis, pad : GraspAxis, Pad
+    contacts : ndarray, shape (2, 2)
+        Rest contact points of pads A and B (m).
+    sigma0, sigma_L : float
+        First-touch width and elastic-limit separation (m).
+    sigma_star : float or None
+        Optimal separation (m); ``None`` when ``Q ≡ 0``.
+    quality, U_A, U_L : float
+        At σ* (J); ``U_A`` may be ``inf``.
+    noise : float
+        Noise floor of the landscape at σ* (J): energy differences below it are not
+        resolved on this mesh.
+    limit : PadLimit
+    curve : dict
+        ``{"sigma", "U", "U_A", "U_L", "Q"}`` samples for plotting (J; ``None`` = ∞).
+    escape_path : list of GraspAxis
+        Minimax escape at σ*, start first (empty if U_A is 0 or ∞).
+    n_axes : int
+        Number of axes whose contact problem was solved.
+    """
+
+    axis: GraspAxis
+    pad: Pad
+    contacts: np.ndarray
+    sigma0: float
+    sigma_L: float
+    sigma_star: float | None
+    quality: float
+    U_A: float
+    U_L: float
+    noise: float
+    limit: PadLimit
+    curve: dict
+    escape_path: list
+    n_axes: int
+    grid: AxisGrid
+    start_curve: GraspCurve = field(repr=False)
+    n_nodes: int = 0
+
+    @property
+    def verdict(self) -> str:
+        """``"held"`` iff quality > 0 (single mesh; ``--refine`` refines this)."""
+        return "held" if self.quality > 0 else "not held"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready report (SPEC §6), SI; an infinite U_A is ``None`` + ``U_A_infinite``."""
+        inf = math.isinf(self.U_A)
+        return {
+            "model": "pads",
+            "pad": self.pad.to_dict(),
+            "axis": self.axis.to_dict(),
+            "contacts": self.contacts.tolist(),
+            "sigma0": self.sigma0,
+            "sigma_L": self.sigma_L,
+            "sigma_star": self.sigma_star,
+            "quality": self.quality,
+            "U_A": None if inf else self.U_A,
+            "U_A_infinite": inf,
+            "U_L": self.U_L,
+            "verdict": self.verdict,
+            "noise_floor": self.noise,
+            "critical_distance": self.limit.critical_distance,
+            "e_L": None,
+            "escape_path": [ax.to_dict() for ax in self.escape_path],
+            "grid": {"d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
+                     "n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets},
+            "n_axes_solved": self.n_axes,
+            "nodes": self.n_nodes,
+            "energy_model": "linear",
+            "curve": self.curve,
+            "units": UNITS,
+        }
+
+
+@dataclass
+class _Eval:
+    sigma: float
+    release: Release
+    UL: float
+
+    @property
+    def UA(self) -> float:
+        return self.release.U_A
+
+    @property
+    def Q(self) -> float:
+        return min(self.UA, self.UL)
+
+    @property
+    def key(self):
+        r = self.release
+        return (r.strict, r.saddle if r.strict and math.isfinite(r.U_A) else None,
+                math.isinf(r.U_A))
+
+
+def _quadratic(f, lo: float, hi: float) -> np.ndarray:
+    """Coefficients ``[a, b, c]`` of the quadratic through ``f`` at lo, mid, hi, in ``x − lo``."""
+    h = hi - lo
+    f0, f1, f2 = f(lo), f(lo + 0.5 * h), f(hi)
+    return np.array([2.0 * (f2 - 2.0 * f1 + f0) / h**2, (4.0 * f1 - f2 - 3.0 * f0) / h, f0])
+
+
+def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
+    """Candidates for ``argmax min(fa, fb)`` on ``[lo, hi]``; fa, fb exact quadratics there."""
+    out = [lo, hi]
+    if hi - lo <= 0:
+        return out
+    coefs = [_quadratic(f, lo, hi) for f in (fa, fb)]
+    for a, b, _ in coefs:
+        if a < 0:
+            x = lo - b / (2 * a)
+            if lo < x < hi:
+                out.append(float(x))
+    diff = coefs[0] - coefs[1]
+    if np.any(diff):
+        for r in np.roots(diff):
+            if abs(r.imag) <= 1e-12 * (hi - lo) and 0 < r.real < hi - lo:
+                out.append(float(lo + r.real))
+    return out
+
+
+def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
+                  twin: PadContact | None = None, n_angles: int = 48, n_offsets: int = 50, n_samples: int = 48,
+                  n_curve: int = 200, noise: bool = True) -> PadGraspResult:
+    """Optimal separation of a two-pad grasp on ``axis`` (contracting).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        With a material (``e_L``, optional ``critical_distance``).
+    axis : GraspAxis
+        Start axis in the part frame.
+    pad : Pad
+    solver : PadContact, optional
+        Reuse a factorisation of this mesh.
+    n_angles, n_offsets : int
+        Landscape grid: ``Δθ = π/n_angles``, ``Δc = D/n_offsets`` (D = diameter).
+    n_samples : int
+        Initial σ samples of the exact search.
+    n_curve : int
+        Samples of the plotted curve.
+    twin : PadContact, optional
+        The same part meshed as a second realisation (:func:`.noise.twin_mesh`); its
+        energies at the start axis and its neighbours give the noise floor. Without it,
+        the jitter under sub-cell moves of the axis is used.
+    noise : bool
+        Measure and use the landscape's noise floor (see :mod:`.noise`).
+
+    Returns
+    -------
+    PadGraspResult
+    """
+    if mesh.material is None:
+        raise GraspError("material: the mesh has no material; give a part file or a mesh JSON "
+                         "with a material")
+    solver = PadContact(mesh) if solver is None else solver
+    ax0 = GraspAxis(axis.angle, axis.offset, axis.origin)
+    start_curve = solver.curve(ax0, pad, 0.0)
+    if start_curve.touch is None:
+        raise GraspError("axis: the pads miss the part on this axis; move the axis onto the part")
+    sigma0 = start_curve.sigma0
+    limit = pad_elastic_limit(solver, start_curve, mesh.material.elastic_limit_strain)
+    sigma_L = limit.sigma_L
+    # Re-anchor the axis at the area centroid so the grid's wrap (θ+π, −c) is exact.
+    cen = solver.centroid
+    start_axis = GraspAxis.at(axis.point, axis.angle, cen)
+    ring = mesh.nodes[mesh.outer_loop]
+    reach = float(np.linalg.norm(ring - cen, axis=1).max()) + pad.half_span
+    grid = AxisGrid.around(start_axis, reach, mesh.diameter, n_angles, n_offsets)
+    land = Landscape(solver, pad, grid, sigma_L)
+    s = grid.vertex(0, 0)
+    land._curves[s] = start_curve
+    Us = start_curve.energy
+
+    if not noise:
+        tau = lambda sig: 0.0  # noqa: E731
+    elif twin is None:
+        tau = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L)
+    else:
+        land.twin = Landscape(twin, pad, grid, sigma_L)
+        tau = land.noise
+    U_sL = float(Us(sigma_L))
+    # With a twin the noise floor grows as the search visits more axes: repeat the search
+    # until every axis it compares has been measured on both realisations.
+    for _ in range(4):
+        best, ev = _search_sigma_star(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples)
+        if twin is None or not noise or not land.measure_noise():
+            break
+    sigma_star = None if best is None else best[1]
+    e_star = ev(sigma0 if sigma_star is None else sigma_star)
+    curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star)
+    rel = e_star.release
+    path = [grid.axis(v) for v in rel.path] if rel.strict and math.isfinite(rel.U_A) else []
+    contacts = np.array([start_curve.touch.contact_a, start_curve.touch.contact_b])
+    return PadGraspResult(
+        axis=GraspAxis(axis.angle, axis.offset, axis.origin), pad=pad, contacts=contacts,
+        sigma0=sigma0, sigma_L=sigma_L, sigma_star=sigma_star,
+        quality=0.0 if sigma_star is None else e_star.Q,
+        U_A=e_star.UA if sigma_star is not None else 0.0,
+        U_L=e_star.UL if sigma_star is not None else 0.0,
+        noise=tau(sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)),
+        limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
+        start_curve=start_curve, n_nodes=mesh.n_nodes)
+
+
+def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
+                       sigma0: float, tau, n_samples: int):
+    """Exact ``argmax Q`` on ``[σ_L, σ0]`` (module docstring); returns ``(best, ev)``.
+
+    ``best`` is ``(Q*, σ*)`` or ``None`` when ``Q ≡ 0``; ``ev(σ)`` evaluates by definition.
+    """
+    tol = 1e-9 * sigma0
+    evals: dict[float, _Eval] = {}
+
+    def ev(sig: float) -> _Eval:
+        if sig not in evals:
+            evals[sig] = _Eval(sig, land.release(s, sig, tau(sig)), U_sL - float(Us(sig)))
+        return evals[sig]
+
+    def UL(x: float) -> float:
+        return U_sL - float(Us(x))
+
+    kinks = land.curve(s).kinks()
+    xs = sorted(set(np.linspace(sigma_L, sigma0, n_samples).tolist())
+                | set(k for k in kinks.tolist() if sigma_L < k < sigma0))
+    best: tuple[float, float] | None = None   # (Q, σ)
+
+    def consider(sig: float, Q: float) -> None:
+        nonlocal best
+        if Q > 0 and (best is None or Q > best[0] or (Q == best[0] and sig > best[1])):
+            best = (Q, sig)
+
+    for x in xs:
+        consider(x, ev(x).Q)
+    stack = list(zip(xs[:-1], xs[1:]))
+    guard = 0
+    while stack and guard < 20000:
+        guard += 1
+        a, b = stack.pop()
+        ea, eb = ev(a), ev(b)
+        if ea.key != eb.key:                  # the saddle or the class changes inside
+            if b - a > tol:
+                m = 0.5 * (a + b)
+                consider(m, ev(m).Q)
+                stack += [(a, m), (m, b)]
+            continue
+        strict, w, infinite = ea.key
+        if not strict or infinite:
+            continue        # Q ≡ 0, or Q = U_L (increasing in σ): the ends suffice
+        Uw = land.curve(w).energy
+
+        def UA(x: float) -> float:
+            return float(Uw(x)) - float(Us(x))
+
+        cuts = np.concatenate([land.curve(w).kinks(), kinks])
+        cuts = np.unique(np.concatenate([[a, b], cuts[(cuts > a) & (cuts < b)]]))
+        for lo, hi in zip(cuts[:-1], cuts[1:]):
+            split = False
+            for x in _quadratic_max_min(UA, UL, lo, hi):
+                Qp = min(UA(x), UL(x))
+                if best is not None and Qp <= best[0]:
+                    continue
+                e = ev(x)
+                if e.key == ea.key and abs(e.Q - Qp) <= 1e-9 * max(abs(Qp), 1e-300):
+                    consider(x, e.Q)
+                elif x not in (a, b) and b - a > tol:
+                    stack += [(a, x), (x, b)]     # the piece assumption failed: split
+                    split = True
+                    break
+            if split:
+                break
+    return best, ev
+
+
+def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star) -> dict:
+    sig = np.linspace(sigma_L, sigma0, n)
+    if sigma_star is not None:
+        sig = np.unique(np.append(sig, sigma_star))
+    UA = [land.release(s, float(x), tau(float(x))).U_A for x in sig]
+    U = Us(sig)
+    UL = U_sL - U
+    Q = np.minimum(np.array(UA), UL)
+
+    def lst(a):
+        return [None if not math.isfinite(float(v)) else float(v) for v in a]
+
+    return {"sigma": lst(sig), "U": lst(U), "U_A": lst(UA), "U_L": lst(UL), "Q": lst(Q)}
