@@ -17,14 +17,19 @@ from .common import json_safe, parse_xy, write_json
 __all__ = ["command", "load_grasp_inputs"]
 
 EPILOG = """\b
-Examples:
-  deformclosure optimize examples/rectangle.json --at 0,10 12,10 -o report.json --plot out/
-  deformclosure optimize mesh.json --jaws 3 17 --method approx --eps 1e-6
-  deformclosure optimize examples/ring.json --at 1.5,0 -1.5,0 --expanding
+Examples (pads, the default model, SPEC §6):
+  deformclosure optimize examples/notched_bar.json --at 15,0 15,12 --pad-radius 2 -o report.json --plot out/
+  deformclosure optimize examples/rectangle.json --axis 6,10,0 --pad-radius 1 --pad-width 4 --refine 3
+\b
+Paper model (point jaws at mesh nodes, SPEC §4, for reproduction):
+  deformclosure optimize examples/rectangle.json --model paper --at 0,10 12,10 -o report.json
+  deformclosure optimize mesh.json --model paper --jaws 3 17 --method approx --eps 1e-6
+  deformclosure optimize examples/ring.json --model paper --at 1.5,0 -1.5,0 --expanding
 
 \b
---at coordinates and --jaw-width are in --units (default: the part file's units,
-metres for mesh files); --eps is in joules. The JSON report is SI throughout.
+Lengths given here (--at, --axis, --pad-radius, --pad-width, --jaw-width) are in --units
+(default: the part file's units, metres for mesh files); --eps is in joules. The JSON
+report is SI throughout and says which model made it.
 """
 
 
@@ -56,25 +61,144 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
 
 @click.command(epilog=EPILOG)
 @click.argument("part", type=click.Path(dir_okay=False))
-@click.option("--jaws", nargs=2, type=int, default=None, metavar="A B", help="Jaw node ids.")
+@click.option("--model", type=click.Choice(["pads", "paper"]), default=None,
+              help="pads (default): rigid pads on a grasp axis, converged (SPEC §6); "
+                   "paper: point jaws at mesh nodes (SPEC §4). --jaws implies paper.")
+@click.option("--jaws", nargs=2, type=int, default=None, metavar="A B",
+              help="Jaw node ids (paper model).")
 @click.option("--at", nargs=2, type=str, default=None, metavar="X,Y X,Y",
-              help="Jaw positions (inserted as mesh nodes for part files).")
+              help="pads: the closing axis through these points; paper: jaw positions "
+                   "(inserted as mesh nodes for part files).")
+@click.option("--axis", type=str, default=None, metavar="X,Y,DEG",
+              help="pads: the closing axis through (X, Y) at DEG degrees.")
+@click.option("--pad-radius", type=float, default=None,
+              help="pads: radius of the pad ends (default 5 % of the part's diameter).")
+@click.option("--pad-width", type=float, default=0.0, show_default=True,
+              help="pads: width of the flat face (0 = round fingertip).")
+@click.option("--refine", type=int, default=1, show_default=True,
+              help="pads: solve on N meshes (h halving); report error estimates and a verdict.")
+@click.option("--grid-angles", type=int, default=48, show_default=True,
+              help="pads: axis angles in the release landscape (Δθ = 180°/N).")
+@click.option("--grid-offsets", type=int, default=50, show_default=True,
+              help="pads: axis offsets per part diameter in the release landscape.")
 @click.option("--method", type=click.Choice(["exact", "approx", "paper"]), default="exact",
-              show_default=True, help="exact: ours; paper: every crossing (reference); approx: ε-grid.")
+              show_default=True, help="paper model: exact: ours; paper: every crossing; approx: ε-grid.")
 @click.option("--eps", type=float, default=None,
-              help="ε of --method approx, in joules (default 1e-3 · ½ k01 (σ0 − σ_L)², the pair squeezed "
-                   "to σ_L, or larger if needed for at most 20 000 grid steps).")
-@click.option("--expanding", is_flag=True, help="Jaws push outward (e.g. from inside a hole).")
+              help="paper model, --method approx: ε in joules (default 1e-3 · ½ k01 (σ0 − σ_L)², "
+                   "or larger if needed for at most 20 000 grid steps).")
+@click.option("--expanding", is_flag=True, help="paper model: jaws push outward (e.g. from inside a hole).")
 @click.option("--jaw-width", type=float, default=0.0, show_default=True,
-              help="Jaw contact width in --units (0 = point jaws).")
-@click.option("--units", type=str, default=None, help="Unit of --at and --jaw-width (m, cm, mm, in).")
+              help="paper model: jaw contact width (0 = point jaws).")
+@click.option("--units", type=str, default=None, help="Unit of the lengths given here (m, cm, mm, in).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="JSON report (SI units).")
-@click.option("--plot", type=click.Path(file_okay=False), help="Folder for quality/deformed/landscape plots.")
-@click.option("--export-graph", type=click.Path(dir_okay=False), help="Write the contact graph (JSON).")
-def command(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot, export_graph) -> int:
-    """Optimal jaw separation σ* maximising Q = min(U_A, U_L) for one jaw pair."""
-    from ..grasp.analysis import grasp_model, optimize_separation
+@click.option("--plot", type=click.Path(file_okay=False), help="Folder for the plots.")
+@click.option("--export-graph", type=click.Path(dir_okay=False),
+              help="paper model: write the contact graph (JSON).")
+@click.option("--quiet", is_flag=True, help="No progress output.")
+def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets,
+            method, eps, expanding, jaw_width, units, output, plot, export_graph, quiet) -> int:
+    """Optimal separation σ* maximising Q = min(U_A, U_L) for one grasp."""
+    if model is None:
+        model = "paper" if jaws is not None else "pads"
+    if model == "paper":
+        return _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot,
+                      export_graph)
+    bad = [name for name, given in (("--jaws", jaws is not None), ("--expanding", expanding),
+                                    ("--jaw-width", jaw_width != 0.0), ("--eps", eps is not None),
+                                    ("--export-graph", export_graph is not None),
+                                    ("--method", method != "exact")) if given]
+    if bad:
+        raise GraspError(f"{bad[0]}: belongs to the paper model; add --model paper, or give the "
+                         "pads an axis with --at X,Y X,Y or --axis X,Y,DEG")
+    return _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
+                 output, plot, quiet)
 
+
+def parse_axis(at, axis, scale: float):
+    """The grasp axis from ``--at X,Y X,Y`` or ``--axis X,Y,DEG`` (lengths × ``scale`` → m)."""
+    from ..pads import GraspAxis
+
+    if (at is None) == (axis is None):
+        raise GraspError("axis: give exactly one of --at X,Y X,Y (two points on the closing axis) "
+                         "or --axis X,Y,DEG (a point and the closing direction in degrees)")
+    if at is not None:
+        p, q = (np.array(parse_xy(v, "--at")) * scale for v in at)
+        return GraspAxis.through(p, q)
+    try:
+        x, y, deg = (float(v) for v in axis.split(","))
+    except ValueError:
+        raise GraspError(f"--axis: expected X,Y,DEG (three numbers), got {axis!r}") from None
+    if not all(np.isfinite([x, y, deg])):
+        raise GraspError(f"--axis: values must be finite, got {axis!r}")
+    return GraspAxis.at(np.array([x, y]) * scale, np.radians(deg))
+
+
+def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
+          output, plot, quiet) -> int:
+    from ..pads import Pad, pad_grasp
+    from .common import load_part_or_mesh
+
+    for name, v, lo in (("--grid-angles", grid_angles, 4), ("--grid-offsets", grid_offsets, 4)):
+        if not (lo <= v <= 2000):
+            raise GraspError(f"{name} = {v}: give a whole number from {lo} to 2000")
+    prt, mesh = load_part_or_mesh(part)
+    unit = units or ("m" if prt is None else prt.units)
+    scale = length_scale(unit, "--units")
+    ax = parse_axis(at, axis, scale)
+    if pad_radius is None:
+        rho = 0.05 * mesh.diameter
+    else:
+        if not (np.isfinite(pad_radius) and pad_radius > 0):
+            raise GraspError(f"--pad-radius = {pad_radius!r}: must be a finite length > 0")
+        rho = pad_radius * scale
+    if not (np.isfinite(pad_width) and pad_width >= 0):
+        raise GraspError(f"--pad-width = {pad_width!r}: must be a finite length >= 0")
+    pad = Pad(pad_width * scale, rho)
+
+    def progress(k: int, n: int) -> None:
+        if not quiet and n > 1:
+            click.echo(f"mesh {k + 1} of {n} ...", err=True)
+
+    res = pad_grasp(prt, ax, pad, mesh=mesh, refine=refine, progress=progress,
+                    n_angles=grid_angles, n_offsets=grid_offsets)
+    report = res.to_dict()
+    fine = res.finest
+    s = 1.0 / length_scale(unit)
+    click.echo(f"model: pads (SPEC §6), W = {pad.width * s:.4g} {unit}, rho = {pad.radius * s:.4g} {unit}; "
+               f"axis through ({fine.axis.point[0] * s:.4g}, {fine.axis.point[1] * s:.4g}) {unit} "
+               f"at {np.degrees(fine.axis.angle):.4g} deg")
+    click.echo(f"sigma0 = {fine.sigma0 * s:.6g} {unit}  sigma_L = {fine.sigma_L * s:.6g} {unit}  "
+               f"(critical distance {fine.limit.critical_distance * s:.3g} {unit})")
+    if fine.sigma_star is None:
+        click.echo("Q = 0 on the whole range: no barrier above the noise floor "
+                   f"({fine.noise_relative:.2%} of U)")
+    else:
+        ua = "infinite" if np.isinf(fine.U_A) else f"{fine.U_A:.6g} J"
+        click.echo(f"sigma* = {fine.sigma_star * s:.6g} {unit}  Q* = {fine.quality:.6g} J  "
+                   f"U_A = {ua}  U_L = {fine.U_L:.6g} J  (noise floor {fine.noise:.3g} J)")
+    if "convergence" in report:
+        click.echo(f"{'max_area (' + unit + '^2)':>18} {'nodes':>7} {'sigma* (' + unit + ')':>14} {'Q* (J)':>12}")
+        for row in report["convergence"]:
+            ss = "-" if row["sigma_star"] is None else f"{row['sigma_star'] * s:.6g}"
+            click.echo(f"{row['max_area'] * s * s:>18.4g} {row['nodes']:>7} {ss:>14} {row['quality']:>12.5g}")
+        e = report["error_estimate"]
+        es = "-" if e["sigma_star"] is None else f"{e['sigma_star'] * s:.3g} {unit}"
+        click.echo(f"error estimate (Richardson): Q* ± {e['quality']:.3g} J, sigma* ± {es}")
+    click.echo(f"verdict: {report['verdict'].upper()}")
+    write_json(report, output)
+    if plot:
+        from ..plotting.pads import save_pad_plots
+
+        for pth in save_pad_plots(fine, mesh, plot,
+                                  units=unit if unit != "m" else "mm"):
+            click.echo(f"wrote {pth}")
+    return 0
+
+
+def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot,
+           export_graph) -> int:
+    """The paper's two-jaw model (SPEC §4), unchanged."""
+    from ..grasp.analysis import grasp_model, optimize_separation
     if (jaws is None) == (at is None):
         raise GraspError("jaws: give exactly one of --jaws A B (node ids) or --at X,Y X,Y (positions)")
     if eps is not None and not (np.isfinite(eps) and eps > 0):
@@ -94,6 +218,7 @@ def command(part, jaws, at, method, eps, expanding, jaw_width, units, output, pl
                                   jaw_width=jaw_width * scale, model=model)
         bar.update(1)
     report = res.to_dict()
+    report["model"] = "paper"
     s = 1.0 / length_scale(unit)
     ss = res.sigma_star
     click.echo(f"jaws: nodes {n0}, {n1}  sigma0 = {res.limit.sigma0 * s:.6g} {unit}  "

@@ -15,7 +15,7 @@ from ..errors import MeshError, PartError
 from ..part import MAX_TRIANGLES, Part
 from .core import Mesh
 
-__all__ = ["mesh_part", "insert_points_in_ring"]
+__all__ = ["mesh_part", "insert_points_in_ring", "default_max_area"]
 
 
 def insert_points_in_ring(ring: np.ndarray, points: np.ndarray, tol: float
@@ -66,6 +66,12 @@ def insert_points_in_ring(ring: np.ndarray, points: np.ndarray, tol: float
     return new[keep], on
 
 
+def default_max_area(part: Part) -> float:
+    """The part's ``mesh.max_area`` (m²), else its area / 400."""
+    opts = part.mesh_options
+    return opts.max_area if opts.max_area is not None else part.area / 400.0
+
+
 def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None = None,
               points: np.ndarray | None = None) -> Mesh:
     """Quality-mesh a part with linear triangles.
@@ -94,9 +100,7 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
     """
     opts = part.mesh_options
     area = part.area
-    max_area = opts.max_area if max_area is None else float(max_area)
-    if max_area is None:
-        max_area = area / 400.0
+    max_area = default_max_area(part) if max_area is None else float(max_area)
     if not (np.isfinite(max_area) and max_area > 0):
         raise PartError(f"max_area = {max_area!r}: must be a finite area > 0")
     if area / max_area > MAX_TRIANGLES:

@@ -1,0 +1,16 @@
+"""Physical jaws (SPEC §6): rigid pads, grasp axes, frictionless contact, converged quality.
+
+Pipeline: :mod:`.geometry` (pads, axes, first touch) → :mod:`.contact` (the contact
+problem of one axis on the condensed compliance, traced exactly in σ by
+:mod:`.homotopy`) → :mod:`.limit` (elastic limit over the critical distance) →
+:mod:`.landscape` (release over axes) and :mod:`.noise` (what the mesh resolves) →
+:mod:`.optimize` (σ*) → :mod:`.refine` (convergence, error, verdict) → :mod:`.plan`.
+"""
+
+from .contact import GraspCurve, PadContact
+from .geometry import FirstTouch, GraspAxis, Pad, first_touch
+from .optimize import PadGraspResult, optimize_pads
+from .refine import RefinedPadGrasp, pad_grasp, richardson
+
+__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "PadContact", "GraspCurve",
+           "optimize_pads", "PadGraspResult", "pad_grasp", "RefinedPadGrasp", "richardson"]

@@ -80,7 +80,7 @@ class GraspCurve:
     def sigma_min(self) -> float:
         """Smallest separation (m) the curve is traced to."""
         if self.path is None:
-            return -np.inf
+            return -np.inf if self.touch is None else self.sigma0
         return self.sigma0 - float(self.path.delta[-1])
 
     def energy(self, sigma: np.ndarray | float) -> np.ndarray:
@@ -89,6 +89,12 @@ class GraspCurve:
         if self.path is None:
             return np.zeros_like(sigma)
         return self.path.energy(self.sigma0 - sigma)
+
+    def energy_at(self, sigma: float) -> float:
+        """Energy (J) at one separation ``sigma`` (m) (scalar fast path of :meth:`energy`)."""
+        if self.path is None:
+            return 0.0
+        return self.path.energy_at(self.touch.sigma0 - sigma)
 
     def kinks(self) -> np.ndarray:
         """Separations (m) where the active contact set changes, decreasing."""
@@ -195,6 +201,10 @@ class PadContact:
             g0 = np.concatenate([gA[selA], gB[selB]]) / norm
             W = self._delassus(nodes, normals)
             path = trace_contact_path(W, g0, pad_of / norm, sgn / norm, delta_max, gap_tol=tol)
+            if not np.isfinite(path.delta[0]):
+                # A pad grazes the part between boundary nodes (no node within its reach):
+                # nothing to squeeze on this mesh.
+                return GraspCurve(axis, pad, touch, nodes, pad_of, normals, None)
             curve = GraspCurve(axis, pad, touch, nodes, pad_of, normals, path)
             missed = self._penetrations(curve, loop, s, d, slope, inside, touch, tol)
             if missed <= cutoff:

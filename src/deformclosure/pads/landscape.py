@@ -13,10 +13,10 @@ Energies are computed lazily, only for the axes a search reaches, and cached as 
 exact curves ``U(σ)``.
 
 **Noise floor.** On an unstructured mesh the energy of an axis jitters as the axis moves
-relative to the nodes; a continuum solution does not. Energy differences below
-``noise`` (J) are not resolved: a start axis is a strict minimum only if every neighbour
-is higher by more than ``noise``, and an axis counts as an equilibrium if no neighbour is
-lower by more than ``noise``; :mod:`.noise` measures it. Energy differences the mesh
+relative to the nodes; a continuum solution does not. Relative energy differences below
+``noise`` are not resolved: a start axis is a strict minimum only if every neighbour is
+higher by more than ``noise`` × its energy, and a barrier smaller than ``noise`` × its
+height is none; :mod:`.noise` measures it. Energy differences the mesh
 cannot resolve are thus ties, and a tie is not a hold: like a translation along parallel
 edges (SPEC §3), a neutral direction lets a frictionless part slide.
 """
@@ -151,25 +151,38 @@ class Landscape:
         self._curves: dict[int, GraspCurve] = {}
         self.twin: "Landscape | None" = None
         self._measured: list[int] = []
-        self.noise_factor = 3.0
+        self.noise_factor = 2.0
 
-    def measure_noise(self) -> bool:
-        """Solve every axis visited so far on the twin realisation; True if any was new."""
-        new = [v for v in self._curves if v not in set(self._measured)]
-        for v in new:
+    def measure_noise(self, most: int = 48) -> bool:
+        """Solve axes visited so far on the twin realisation, at most ``most`` in all
+        (spread evenly over the visit order); True if any was added."""
+        done = set(self._measured)
+        visited = list(self._curves)
+        room = most - len(self._measured)
+        if room <= 0:
+            return False
+        todo = [v for v in visited if v not in done]
+        if len(todo) > room:
+            todo = [todo[int(k)] for k in np.linspace(0, len(todo) - 1, room)]
+        for v in todo:
             self.twin.curve(v)
-        self._measured.extend(new)
-        return bool(new)
+        self._measured.extend(todo)
+        return bool(todo)
 
     def noise(self, sigma: float) -> float:
-        """Noise floor (J) at ``sigma`` (m): ``noise_factor`` × the largest difference
-        between the two realisations' energies over the axes measured so far."""
+        """Relative noise at ``sigma`` (m): ``noise_factor`` × the 90th percentile, over the
+        axes measured on both realisations, of ``|U₁ − U₂| / max(U₁, U₂)``."""
         if self.twin is None:
             return 0.0
         if not self._measured:
             self.measure_noise()
-        return self.noise_factor * max(abs(self.energy(v, sigma) - self.twin.energy(v, sigma))
-                                       for v in self._measured)
+        U1 = np.array([self.energy(v, sigma) for v in self._measured])
+        U2 = np.array([self.twin.energy(v, sigma) for v in self._measured])
+        top = np.maximum(U1, U2)
+        ok = top > 0
+        if not ok.any():
+            return 0.0
+        return self.noise_factor * float(np.quantile(np.abs(U1 - U2)[ok] / top[ok], 0.9))
 
     def curve(self, v: int) -> GraspCurve:
         """The exact energy curve of vertex ``v`` (computed once)."""
@@ -186,10 +199,15 @@ class Landscape:
 
     def energy(self, v: int, sigma: float) -> float:
         """Energy (J) of vertex ``v`` at separation ``sigma`` (m)."""
-        return float(self.curve(v).energy(sigma))
+        return self.curve(v).energy_at(sigma)
 
     def release(self, start: int, sigma: float, noise: float = 0.0) -> Release:
-        """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid)."""
+        """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
+
+        ``noise`` is the relative noise floor: two energies closer than ``noise`` × the
+        larger are a tie. The start must exceed no neighbour within it (else ``U_A = 0``),
+        and a barrier within it of the start's energy is no barrier (``U_A = 0``).
+        """
         g = self.grid
         E: dict[int, float] = {}
 
@@ -199,7 +217,7 @@ class Landscape:
             return E[v]
 
         Us = U(start)
-        if min(U(w) for w in g.neighbours(start)) <= Us + noise:
+        if any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)):
             return Release(0.0, False, None, [])
         best = {start: Us}
         parent: dict[int, int] = {}
@@ -210,13 +228,13 @@ class Landscape:
             if b > best.get(v, math.inf):
                 continue
             nbrs = g.neighbours(v)
-            if v != start and U(v) <= min(U(w) for w in nbrs) + noise:
+            if v != start and U(v) <= min(U(w) for w in nbrs):
+                if b - Us <= noise * b:      # a barrier the mesh cannot resolve is a tie
+                    return Release(0.0, False, None, [])
                 path = [v]
                 while path[-1] != start:
                     path.append(parent[path[-1]])
                 path.reverse()
-                if b - Us <= noise:      # a barrier the mesh cannot resolve is a tie
-                    return Release(0.0, False, None, [])
                 saddle = max(path, key=U)
                 return Release(b - Us, True, saddle, path)
             for w in nbrs:

@@ -4,9 +4,11 @@ On an unstructured mesh the energy of a grasp axis carries an error that changes
 axis to axis: it depends on where the nodes happen to sit under the pads. Two mirror-image
 axes of a symmetric part differ by ~1 % at a coarse mesh and ~0.1 % at a fine one, while
 the energy differences that decide whether a part slides out can be smaller. We measure
-that noise directly: the same part meshed a second time at the same resolution but in a
-rotated frame (another, equally good realisation), and the energy of the same physical
-axes compared between the two. A continuum answer cannot depend on the realisation, so
+that noise directly: the same part meshed a second time, in a rotated frame and with
+:data:`TWIN_AREA` times the triangle area (another, equally good realisation whose boundary
+nodes sit elsewhere: Triangle splits a straight edge evenly, so a rotation alone would
+reproduce the boundary nodes and miss the largest part of the noise, the position of the
+nodes under the pads), and the energy of the same physical axes compared between the two. A continuum answer cannot depend on the realisation, so
 their difference is discretisation noise. Where no part geometry is available (a mesh
 file), the jitter of the energy under sub-cell moves of the axis stands in for it.
 """
@@ -21,10 +23,13 @@ from ..mesh import mesh_part
 from .contact import PadContact
 from .geometry import GraspAxis, Pad
 
-__all__ = ["twin_mesh", "realisation_noise", "jitter_noise", "TWIN_ANGLE"]
+__all__ = ["twin_mesh", "jitter_noise", "TWIN_ANGLE", "TWIN_AREA"]
 
 #: Rotation (rad) of the frame in which the twin realisation is meshed.
 TWIN_ANGLE = 1.0
+
+#: Triangle-area ratio of the twin realisation (boundary nodes at other positions).
+TWIN_AREA = 0.7
 
 
 def _rot(angle: float) -> np.ndarray:
@@ -32,10 +37,13 @@ def _rot(angle: float) -> np.ndarray:
     return np.array([[c, -s], [s, c]])
 
 
-def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE):
-    """The part meshed in a frame rotated by ``angle`` (rad), returned in the part frame.
+def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
+              area_ratio: float = TWIN_AREA):
+    """A second realisation of the part's mesh, returned in the part frame.
 
-    Same mesher settings, so the same resolution; different node positions.
+    Meshed in a frame rotated by ``angle`` (rad) with ``area_ratio`` × the triangle area
+    ``max_area`` (m², default the part's), so every node, boundary nodes included, sits
+    elsewhere.
     """
     c = part.outer.mean(axis=0)
     R = _rot(angle)
@@ -44,40 +52,10 @@ def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE):
     pts = np.asarray(opts.points, float).reshape(-1, 2)
     rpart = replace(part, outer=rot(part.outer), holes=tuple(rot(h) for h in part.holes),
                     mesh_options=replace(opts, points=rot(pts) if len(pts) else opts.points))
-    return mesh_part(rpart, max_area=max_area).rotated(-angle, c)
+    from ..mesh.generate import default_max_area
 
-
-def realisation_noise(solver: PadContact, twin: PadContact, pad: Pad, axes: list[GraspAxis],
-                      sigma_min: float, factor: float = 3.0, n_sigma: int = 16):
-    """Noise floor from two mesh realisations, as a function of the separation.
-
-    The relative difference ``|U₁ − U₂| / max(U₁, U₂)`` between the realisations is taken
-    at its largest over ``axes`` and ``n_sigma`` separations between ``sigma_min`` and the
-    first axis' first touch; the floor is ``factor`` × that × the first axis' energy.
-    ``factor = 3``: a barrier is a difference of two noisy energies, and the largest of a
-    few samples underestimates the largest of the many a landscape search compares.
-
-    Returns
-    -------
-    callable
-        ``noise(sigma)`` (J) at separation ``sigma`` (m).
-    """
-    pairs = [(solver.curve(ax, pad, sigma_min), twin.curve(ax, pad, sigma_min)) for ax in axes]
-    start = pairs[0][0]
-    sig = np.linspace(sigma_min, start.sigma0, n_sigma + 2)[1:-1]
-    rel = 0.0
-    for a, b in pairs:
-        Ua, Ub = a.energy(sig), b.energy(sig)
-        top = np.maximum(Ua, Ub)
-        ok = top > 0
-        if ok.any():
-            rel = max(rel, float((np.abs(Ua - Ub)[ok] / top[ok]).max()))
-
-    def noise(sigma: float) -> float:
-        return factor * rel * float(start.energy(sigma))
-
-    noise.relative = factor * rel
-    return noise
+    area = default_max_area(part) if max_area is None else max_area
+    return mesh_part(rpart, max_area=area * area_ratio).rotated(-angle, c)
 
 
 def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
@@ -91,7 +69,8 @@ def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
     Returns
     -------
     callable
-        ``noise(sigma)`` (J): ``factor`` × the largest residual at ``sigma`` (m).
+        ``noise(sigma)``: ``factor`` × the largest residual at ``sigma`` (m), relative to
+        the axis' own energy there.
     """
     ts = np.linspace(-0.5, 0.5, n)
     curves = []
@@ -106,6 +85,7 @@ def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
 
     def noise(sigma: float) -> float:
         U = np.array([float(c.energy(sigma)) for c in curves]).reshape(2, n)
-        return factor * float(np.abs(U @ proj.T).max())
+        U0 = float(curves[n // 2].energy(sigma))
+        return factor * float(np.abs(U @ proj.T).max()) / U0 if U0 > 0 else 0.0
 
     return noise

@@ -23,7 +23,7 @@ from ..errors import GraspError
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid, Landscape, Release
-from .noise import jitter_noise, realisation_noise
+from .noise import jitter_noise
 from .limit import PadLimit, critical_distance_of, pad_elastic_limit
 
 __all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
@@ -48,8 +48,10 @@ class PadGraspResult:
     quality, U_A, U_L : float
         At σ* (J); ``U_A`` may be ``inf``.
     noise : float
-        Noise floor of the landscape at σ* (J): energy differences below it are not
-        resolved on this mesh.
+        Noise floor of the landscape at σ* (J; mid-range if not held): energy
+        differences below it are not resolved on this mesh.
+    noise_relative : float
+        The same relative to the start axis' energy.
     limit : PadLimit
     curve : dict
         ``{"sigma", "U", "U_A", "U_L", "Q"}`` samples for plotting (J; ``None`` = ∞).
@@ -69,6 +71,7 @@ class PadGraspResult:
     U_A: float
     U_L: float
     noise: float
+    noise_relative: float
     limit: PadLimit
     curve: dict
     escape_path: list
@@ -99,6 +102,7 @@ class PadGraspResult:
             "U_L": self.U_L,
             "verdict": self.verdict,
             "noise_floor": self.noise,
+            "noise_floor_relative": self.noise_relative,
             "critical_distance": self.limit.critical_distance,
             "e_L": None,
             "escape_path": [ax.to_dict() for ax in self.escape_path],
@@ -210,15 +214,18 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     land = Landscape(solver, pad, grid, sigma_L)
     s = grid.vertex(0, 0)
     land._curves[s] = start_curve
-    Us = start_curve.energy
+    Us = start_curve.energy_at
 
     if not noise:
         tau = lambda sig: 0.0  # noqa: E731
-    elif twin is None:
-        tau = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L)
     else:
-        land.twin = Landscape(twin, pad, grid, sigma_L)
-        tau = land.noise
+        # Two views of the noise: the jitter under sub-cell moves of the start axis (the
+        # nodes' positions under the pads) and, with a twin, the spread between two mesh
+        # realisations over every axis the search compares. The larger counts.
+        jitter = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L)
+        if twin is not None:
+            land.twin = Landscape(twin, pad, grid, sigma_L)
+        tau = lambda sig: max(jitter(sig), land.noise(sig))  # noqa: E731
     U_sL = float(Us(sigma_L))
     # With a twin the noise floor grows as the search visits more axes: repeat the search
     # until every axis it compares has been measured on both realisations.
@@ -228,6 +235,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
             break
     sigma_star = None if best is None else best[1]
     e_star = ev(sigma0 if sigma_star is None else sigma_star)
+    sig_n = sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)
     curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star)
     rel = e_star.release
     path = [grid.axis(v) for v in rel.path] if rel.strict and math.isfinite(rel.U_A) else []
@@ -238,7 +246,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         quality=0.0 if sigma_star is None else e_star.Q,
         U_A=e_star.UA if sigma_star is not None else 0.0,
         U_L=e_star.UL if sigma_star is not None else 0.0,
-        noise=tau(sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)),
+        noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes)
 
@@ -287,7 +295,7 @@ def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
         strict, w, infinite = ea.key
         if not strict or infinite:
             continue        # Q ≡ 0, or Q = U_L (increasing in σ): the ends suffice
-        Uw = land.curve(w).energy
+        Uw = land.curve(w).energy_at
 
         def UA(x: float) -> float:
             return float(Uw(x)) - float(Us(x))
@@ -317,7 +325,7 @@ def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star) -> dic
     if sigma_star is not None:
         sig = np.unique(np.append(sig, sigma_star))
     UA = [land.release(s, float(x), tau(float(x))).U_A for x in sig]
-    U = Us(sig)
+    U = np.array([Us(float(x)) for x in sig])
     UL = U_sL - U
     Q = np.minimum(np.array(UA), UL)
 

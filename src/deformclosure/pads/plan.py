@@ -1,0 +1,190 @@
+"""Rank grasp axes of a part for a pad gripper (SPEC §6, ``plan --pad-radius``).
+
+Every axis of a ``(θ, c)`` grid over the whole part is solved once, as an exact energy
+curve in σ; on a shared lattice of separations the release energies of *all* axes follow
+from one union–find sweep per σ (the landscape is the same for every start axis). Axes
+that are never a strict minimum beyond the noise floor cannot hold at any σ; for the
+others the elastic limit is computed (critical-distance strain) and ``Q = min(U_A, U_L)``
+is maximised on the lattice. The best ``top`` axes are then solved exactly with
+:func:`~deformclosure.pads.optimize.optimize_pads` on a grid anchored at each of them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import GraspError
+from ..grasp import _kernels
+from .contact import PadContact
+from .geometry import GraspAxis, Pad
+from .landscape import AxisGrid
+from .limit import pad_elastic_limit
+from .optimize import UNITS, optimize_pads
+
+__all__ = ["PadPlan", "plan_pads"]
+
+
+@dataclass(frozen=True, eq=False)
+class PadPlan:
+    """A ranked list of grasp axes.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One per axis that meets the part, best first: ``angle`` (rad), ``offset`` (m,
+        from the area centroid), ``point`` (m), ``contacts`` (rest contact points, m),
+        ``sigma0``, ``sigma_star`` (m or None), ``quality`` (J), ``verdict``, ``method``
+        (``"exact"`` for the refined ones, ``"lattice"`` otherwise).
+    pad : Pad
+    grid : AxisGrid
+    n_sigma : int
+    noise_relative : float
+    """
+
+    rows: list[dict]
+    pad: Pad
+    grid: AxisGrid
+    n_sigma: int
+    noise_relative: float
+    top: list = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready report (SI)."""
+        return {"model": "pads", "pad": self.pad.to_dict(),
+                "grid": {"n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets,
+                         "d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
+                         "origin": list(self.grid.origin)},
+                "n_sigma": self.n_sigma, "noise_floor_relative": self.noise_relative,
+                "axes": self.rows, "units": UNITS}
+
+
+def _grid_graph(grid: AxisGrid) -> sp.csr_matrix:
+    V = grid.size
+    rows, cols = [], []
+    for v in range(V):
+        for w in grid.neighbours(v):
+            rows.append(v)
+            cols.append(w)
+    A = sp.csr_matrix((np.ones(len(rows), bool), (rows, cols)), shape=(V, V))
+    A = (A + A.T).tocsr()
+    A.sort_indices()
+    return A
+
+
+def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigma: int = 64,
+              top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
+              solver: PadContact | None = None, progress=None) -> PadPlan:
+    """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    pad : Pad
+    n_angles, n_offsets : int
+        Grid: ``Δθ = π / n_angles``, ``Δc = D / n_offsets`` (D = diameter).
+    n_sigma : int
+        Separations in the shared lattice.
+    top : int
+        Number of best axes solved exactly afterwards.
+    twin : PadContact, optional
+        A second mesh realisation (:func:`.noise.twin_mesh`): ``noise_samples`` axes
+        spread over the grid are solved on it too, and twice the 90th percentile of the
+        relative difference is the noise floor at each lattice σ (ties below it).
+    progress : callable, optional
+        ``progress(done, total)`` while the axes are solved.
+    """
+    if mesh.material is None:
+        raise GraspError("material: the mesh has no material; give a part file or a mesh JSON "
+                         "with a material")
+    solver = PadContact(mesh) if solver is None else solver
+    cen = solver.centroid
+    ring = mesh.nodes[mesh.outer_loop]
+    reach = float(np.linalg.norm(ring - cen, axis=1).max()) + pad.half_span
+    grid = AxisGrid.around(GraspAxis(0.0, 0.0, tuple(cen)), reach, mesh.diameter, n_angles,
+                           n_offsets)
+    e_L = mesh.material.elastic_limit_strain
+    V = grid.size
+    curves = []
+    for v in range(V):
+        ax = grid.axis(v)
+        c = solver.curve(ax, pad, np.inf)          # first touch only, to know σ0
+        if c.touch is not None:
+            c = solver.curve(ax, pad, max(c.sigma0 * (1.0 - min(e_L, 0.95)), 0.0))
+        curves.append(c)
+        if progress is not None:
+            progress(v + 1, V)
+    sig0 = np.array([c.sigma0 if c.touch is not None else np.nan for c in curves])
+    lo = float(np.nanmin([c.sigma_min for c in curves if c.touch is not None]))
+    hi = float(np.nanmax(sig0))
+    lattice = np.linspace(lo, hi, n_sigma)
+    E = np.array([c.energy(lattice) for c in curves])            # (V, K)
+    A = _grid_graph(grid)
+    tau = np.zeros(n_sigma)
+    if twin is not None:
+        touching = [v for v in range(V) if curves[v].path is not None]
+        pick = [touching[int(i)] for i in np.linspace(0, len(touching) - 1,
+                                                       min(noise_samples, len(touching)))]
+        rel = []
+        for v in pick:
+            c2 = twin.curve(grid.axis(v), pad, curves[v].sigma_min)
+            U1, U2 = E[v], c2.energy(lattice)
+            top_ = np.maximum(U1, U2)
+            rel.append(np.where(top_ > 0, np.abs(U1 - U2) / np.where(top_ > 0, top_, 1.0), np.nan))
+        rel = np.array(rel)
+        with np.errstate(all="ignore"):
+            q = np.nanquantile(rel, 0.9, axis=0) if np.isfinite(rel).any() else np.zeros(n_sigma)
+        tau = 2.0 * np.nan_to_num(q)
+    UA = np.zeros_like(E)
+    for k in range(n_sigma):
+        U = E[:, k]
+        nmin = _kernels.neighbour_min(A.indptr, A.indices, U)
+        # Strict beyond the noise floor: every neighbour higher by more than tau × its energy.
+        Umin_rel = np.full(V, np.inf)
+        for v in range(V):
+            nb = A.indices[A.indptr[v]:A.indptr[v + 1]]
+            Umin_rel[v] = np.min(U[nb] - tau[k] * U[nb] - U[v])
+        strict = Umin_rel > 0
+        ua = _kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
+        ua[(ua > 0) & np.isfinite(ua) & (ua <= tau[k] * (U + ua))] = 0.0   # ties
+        UA[:, k] = ua
+    rows = []
+    for v in range(V):
+        c = curves[v]
+        if c.touch is None:
+            continue
+        ax = grid.axis(v)
+        q, s_star, method = 0.0, None, "lattice"
+        inrange = lattice <= c.sigma0
+        if np.any(UA[v, inrange] > 0):
+            lim = pad_elastic_limit(solver, c, e_L)
+            UL = c.energy_at(lim.sigma_L) - E[v]
+            ok = inrange & (lattice >= lim.sigma_L)
+            Q = np.where(ok, np.minimum(UA[v], UL), 0.0)
+            k = int(np.argmax(Q))
+            if Q[k] > 0:
+                q, s_star = float(Q[k]), float(lattice[k])
+        rows.append({"vertex": v, "angle": ax.angle, "offset": ax.offset,
+                     "point": ax.point.tolist(),
+                     "contacts": [c.touch.contact_a.tolist(), c.touch.contact_b.tolist()],
+                     "sigma0": c.sigma0, "sigma_star": s_star, "quality": q,
+                     "verdict": "held" if q > 0 else "not held", "method": method})
+    rows.sort(key=lambda r: -r["quality"])
+    refined = []
+    for r in rows[:top]:
+        if r["quality"] <= 0:
+            break
+        ax = GraspAxis(r["angle"], r["offset"], tuple(cen))
+        res = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, n_angles=2 * n_angles,
+                            n_offsets=n_offsets)
+        r.update({"sigma_star": res.sigma_star, "quality": res.quality, "verdict": res.verdict,
+                  "method": "exact", "lattice_quality": r["quality"]})
+        refined.append(res)
+    rows.sort(key=lambda r: (-r["quality"], r["method"] != "exact"))
+    for r in rows:
+        r.pop("vertex")
+    return PadPlan(rows, pad, grid, n_sigma, float(np.max(tau)), refined)

@@ -1,0 +1,160 @@
+"""Pictures of pad grasps (SPEC §6): the quality curve, the gripper on the part, plans."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..units import length_scale
+from .mesh import new_figure, save_figure
+
+__all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots"]
+
+
+def _nan(v) -> np.ndarray:
+    return np.array([np.nan if x is None else x for x in v], float)
+
+
+def plot_pad_quality(result, ax=None, units: str = "mm"):
+    """``U``, ``U_A``, ``U_L`` and ``Q`` (mJ) against the pad separation σ.
+
+    Parameters
+    ----------
+    result : PadGraspResult
+    ax : matplotlib Axes, optional
+    units : str
+        Length unit of the σ axis.
+
+    Returns
+    -------
+    Axes
+    """
+    if ax is None:
+        _, ax = new_figure((7, 4.5))
+    s = 1.0 / length_scale(units)
+    c = result.curve
+    sig = _nan(c["sigma"]) * s
+    ax.plot(sig, _nan(c["Q"]) * 1e3, color="0.6", lw=5, alpha=0.6, label="$Q = \\min(U_A, U_L)$")
+    ax.plot(sig, _nan(c["U_A"]) * 1e3, color="C0", lw=1.2, label="$U_A$ (release energy)")
+    ax.plot(sig, _nan(c["U_L"]) * 1e3, color="C1", lw=1.2, label="$U_L$ (to elastic limit)")
+    ax.plot(sig, _nan(c["U"]) * 1e3, color="k", lw=0.8, ls="--", label="$U$ (grasp energy)")
+    if result.sigma_star is not None:
+        ax.axvline(result.sigma_star * s, color="C3", ls="--", lw=1)
+        ax.plot([result.sigma_star * s], [result.quality * 1e3], "o", color="C3",
+                label=f"$\\sigma^*$ = {result.sigma_star * s:.4g} {units}")
+    ax.axvline(result.sigma_L * s, color="C1", ls=":", lw=1,
+               label=f"$\\sigma_L$ = {result.sigma_L * s:.4g} {units}")
+    ax.set_xlabel(f"pad separation σ ({units})")
+    ax.set_ylabel("energy (mJ)")
+    ax.set_title(f"pads W = {result.pad.width * s:.3g}, ρ = {result.pad.radius * s:.3g} {units}: "
+                 f"{result.verdict}")
+    ax.legend(fontsize=8)
+    return ax
+
+
+def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarray:
+    """Outline (in plot units) of a pad whose face is at axial position ``z``."""
+    a, n = axis.direction, axis.normal
+    h, r = 0.5 * pad.width, pad.radius
+    t = np.linspace(0, np.pi / 2, 24)
+    # Face side of the capsule in (x, s) with s measured from the face towards the part.
+    right = np.column_stack([h + r * np.sin(t), r - r * np.cos(t)])
+    prof = np.vstack([right[::-1] * [-1, 1], right])
+    back = np.array([[h + r, r + depth], [-h - r, r + depth]])
+    pts = np.vstack([prof, back])
+    x, sd = pts[:, 0], pts[:, 1]
+    o = np.asarray(axis.origin) + axis.offset * n
+    P = o[None] + x[:, None] * n[None] + (z - side * sd)[:, None] * a[None]
+    return P * s
+
+
+def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
+    """Draw both pads of ``result`` at separation ``sigma`` (default: first touch)."""
+    s = 1.0 / length_scale(units)
+    touch = result.start_curve.touch
+    sigma = result.sigma0 if sigma is None else sigma
+    za = touch.z_a + 0.5 * (result.sigma0 - sigma)
+    depth = 0.15 * max(result.sigma0, result.pad.half_span)
+    for z, side in ((za, 1), (za + sigma, -1)):
+        P = _capsule(result.pad, result.axis, z, side, s, depth)
+        ax.fill(P[:, 0], P[:, 1], color=kw.get("color", "0.35"), alpha=kw.get("alpha", 0.8), lw=0)
+    return ax
+
+
+def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
+    """The part with the closing axis, the pads at σ*, the contact points and the escape.
+
+    Parameters
+    ----------
+    result : PadGraspResult
+    mesh : Mesh
+    ax : matplotlib Axes, optional
+    units : str
+
+    Returns
+    -------
+    Axes
+    """
+    if ax is None:
+        _, ax = new_figure((6, 6))
+    s = 1.0 / length_scale(units)
+    for lp in mesh.loops:
+        P = mesh.nodes[np.append(lp, lp[0])] * s
+        ax.plot(P[:, 0], P[:, 1], color="k", lw=1)
+    ax.fill(*(mesh.nodes[mesh.outer_loop] * s).T, color="C0", alpha=0.15, lw=0)
+    a = result.axis.direction
+    c = result.contacts * s
+    mid = c.mean(axis=0)
+    L = 0.75 * mesh.diameter * s
+    ax.plot([mid[0] - L * a[0], mid[0] + L * a[0]], [mid[1] - L * a[1], mid[1] + L * a[1]],
+            color="C3", lw=0.8, ls="-.")
+    draw_pads(ax, result, result.sigma_star, units)
+    ax.plot(c[:, 0], c[:, 1], "o", color="C3", ms=4)
+    for ax_i in result.escape_path[1:]:
+        p = ax_i.point * s
+        d = ax_i.direction
+        ax.plot([p[0] - L * d[0], p[0] + L * d[0]], [p[1] - L * d[1], p[1] + L * d[1]],
+                color="C2", lw=0.5, alpha=0.6)
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x ({units})")
+    ax.set_ylabel(f"y ({units})")
+    sig = "-" if result.sigma_star is None else f"{result.sigma_star * s:.4g} {units}"
+    ax.set_title(f"{result.verdict}: σ* = {sig}, Q* = {result.quality * 1e3:.4g} mJ")
+    return ax
+
+
+def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
+    """The best ``n`` grasp axes of a pad plan drawn on the part, ranked."""
+    if ax is None:
+        _, ax = new_figure((6, 6))
+    s = 1.0 / length_scale(units)
+    for lp in mesh.loops:
+        P = mesh.nodes[np.append(lp, lp[0])] * s
+        ax.plot(P[:, 0], P[:, 1], color="k", lw=1)
+    ax.fill(*(mesh.nodes[mesh.outer_loop] * s).T, color="C0", alpha=0.12, lw=0)
+    for k, row in enumerate(plan.rows[:n]):
+        if row["quality"] <= 0:
+            break
+        c = np.asarray(row["contacts"]) * s
+        ax.plot(c[:, 0], c[:, 1], "-o", color=f"C{k % 10}", lw=2, ms=5,
+                label=f"#{k + 1}: Q* = {row['quality'] * 1e3:.3g} mJ")
+    ax.set_aspect("equal")
+    ax.set_xlabel(f"x ({units})")
+    ax.set_ylabel(f"y ({units})")
+    ax.set_title("best grasp axes (pads)")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    return ax
+
+
+def save_pad_plots(result, mesh, out_dir: str | Path, units: str = "mm") -> list[Path]:
+    """Write ``quality.png`` and ``grasp.png`` into ``out_dir``; return the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, fn in (("quality.png", plot_pad_quality), ("grasp.png", None)):
+        ax = fn(result, units=units) if fn is not None else plot_pad_grasp(result, mesh, units=units)
+        save_figure(ax.figure, out / name)
+        paths.append(out / name)
+    return paths
