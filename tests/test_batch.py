@@ -271,10 +271,11 @@ def _optimize_jobs(tmp_path: Path, n: int) -> Path:
     for i in range(n):
         y = 3 + (i // 2) * 1.5
         entries.append({"part": "rectangle.json", "command": "optimize",
-                        "options": ["--at", f"0,{y:g}", f"12,{y:g}",
+                        "options": ["--model", "paper", "--at", f"0,{y:g}", f"12,{y:g}",
                                     *(["--method", "exact"], ["--method", "approx", "--eps", "1e-5"])[i % 2]]})
     entries += [{"part": "plate_with_hole.json", "command": "mesh"},
-                {"part": "corrupt.json", "command": "optimize", "options": ["--at", "0,1", "1,0"]}]
+                {"part": "corrupt.json", "command": "optimize",
+                 "options": ["--model", "paper", "--at", "0,1", "1,0"]}]
     return _write_list(tmp_path / "jobs.json", entries)
 
 

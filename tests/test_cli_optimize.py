@@ -31,7 +31,7 @@ def test_optimize_report_is_si_and_complete(tmp_path):
     part = _small_part(tmp_path, [[0, 0], [12, 0], [12, 20], [0, 20]], max_area=4.0)
     out = tmp_path / "r.json"
     graph = tmp_path / "g.json"
-    assert main(["optimize", str(part), "--at", "0,10", "12,10", "-o", str(out),
+    assert main(["optimize", str(part), "--model", "paper", "--at", "0,10", "12,10", "-o", str(out),
                  "--export-graph", str(graph)]) == 0
     r = json.loads(out.read_text())
     assert SPEC_KEYS <= set(r)
@@ -64,7 +64,7 @@ def test_expanding_grasp_on_ring(tmp_path):
     out = {}
     for method in ("exact", "paper"):
         o = tmp_path / f"{method}.json"
-        assert main(["optimize", str(part), "--at", "5,0", "-5,0", "--expanding",
+        assert main(["optimize", str(part), "--model", "paper", "--at", "5,0", "-5,0", "--expanding",
                      "--method", method, "-o", str(o)]) == 0
         out[method] = json.loads(o.read_text())
     r = out["exact"]
@@ -82,7 +82,7 @@ def test_approx_default_eps_is_documented_and_guaranteed(tmp_path):
     out = {}
     for method in ("approx", "exact"):
         o = tmp_path / f"{method}.json"
-        assert main(["optimize", str(part), "--at", "0,10", "12,10", "--method", method, "-o", str(o)]) == 0
+        assert main(["optimize", str(part), "--model", "paper", "--at", "0,10", "12,10", "--method", method, "-o", str(o)]) == 0
         out[method] = json.loads(o.read_text())
     a, e = out["approx"], out["exact"]
     eps = 1e-3 * 0.5 * a["k01"] * (a["sigma0"] - a["sigma_L"]) ** 2
@@ -107,7 +107,8 @@ BAD = [
 @pytest.mark.parametrize("args,pattern", BAD)
 def test_bad_optimize_input_is_one_line_exit_2(tmp_path, args, pattern):
     part = _small_part(tmp_path, [[0, 0], [12, 0], [12, 20], [0, 20]], max_area=8.0)
-    proc = subprocess.run([sys.executable, "-m", "deformclosure", "optimize", str(part), *args],
+    proc = subprocess.run([sys.executable, "-m", "deformclosure", "optimize", str(part),
+                           "--model", "paper", *args],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stderr
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
@@ -128,7 +129,7 @@ def test_approx_default_eps_bounds_the_number_of_samples(tmp_path):
                                           "elastic_limit_strain": 1e-4},
                              "mesh": {"max_area": 4.0}}))
     out = tmp_path / "r.json"
-    assert main(["optimize", str(p), "--at", "0,10", "12,10", "--method", "approx", "-o", str(out)]) == 0
+    assert main(["optimize", str(p), "--model", "paper", "--at", "0,10", "12,10", "--method", "approx", "-o", str(out)]) == 0
     r = json.loads(out.read_text())
     span = r["sigma0"] - r["sigma_L"]
     formula = 1e-3 * 0.5 * r["k01"] * span ** 2

@@ -111,7 +111,7 @@ def test_cli_plan_report(tmp_path):
     part.write_text(json.dumps({"units": "mm", "outer": outer, "material": MAT,
                                 "mesh": {"max_area": area}}))
     out = tmp_path / "plan.json"
-    assert main(["plan", str(part), "--top", "2", "-o", str(out), "--quiet",
+    assert main(["plan", str(part), "--model", "paper", "--top", "2", "-o", str(out), "--quiet",
                  "--plot", str(tmp_path / "plots")]) == 0
     r = json.loads(out.read_text())
     assert {"pairs", "epsilon", "units"} <= set(r)

@@ -16,7 +16,7 @@ from .errors import (BatchError, DeformClosureError, FingerError, GraspError, Me
 from .grasp import (ContactGraph, GraspAnalysis, contact_graph, grasp_model, optimize_separation,
                     pair_stiffness, release_energies, release_energy)
 from .mesh import Mesh, mesh_part, read_mesh, write_mesh
-from .part import Material, MeshOptions, Part, demo_part
+from .part import Material, MeshOptions, Part, demo_part, notched_part
 
 from .planning.plan import PlanResult, plan_grasps  # noqa: E402
 
@@ -27,7 +27,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "__version__",
-    "Part", "Material", "MeshOptions", "demo_part",
+    "Part", "Material", "MeshOptions", "demo_part", "notched_part",
     "Mesh", "mesh_part", "read_mesh", "write_mesh",
     "stiffness_matrix", "element_strains", "principal_strains", "strain_magnitude",
     "FreeBodySolver", "rigid_modes", "read_stiffness",

@@ -433,3 +433,27 @@ def demo_part(max_area_mm2: float = 1.0) -> Part:
                      "elastic_limit_strain": 0.8, "plane": "stress"},
         "mesh": {"max_area": max_area_mm2, "min_angle": 30, "points": [[0, 10], [12, 10]]},
     })
+
+
+def notched_part(max_area_mm2: float = 0.4) -> Part:
+    """The built-in part a frictionless gripper can hold: a notched rubber bar.
+
+    A 30 × 12 mm bar of the demo's rubber (E = 2 MPa, nu = 0.1, e_L = 0.8, thickness
+    1 mm, plane stress) with a V-notch 3 mm deep and 6 mm wide (45° flanks) in the middle
+    of each long side; round pads seated in the notches hold it (SPEC §6).
+
+    Parameters
+    ----------
+    max_area_mm2 : float
+        Largest triangle area (mm²).
+    """
+    return Part.from_dict({
+        "name": "notched-bar-30x12",
+        "units": "mm",
+        "outer": [[0, 0], [12, 0], [15, 3], [18, 0], [30, 0], [30, 12], [18, 12], [15, 9],
+                  [12, 12], [0, 12]],
+        "holes": [],
+        "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
+                     "elastic_limit_strain": 0.8, "plane": "stress"},
+        "mesh": {"max_area": max_area_mm2, "min_angle": 30},
+    })

@@ -14,20 +14,34 @@ from .optimize import load_grasp_inputs
 __all__ = ["command"]
 
 EPILOG = """\b
-Examples:
-  deformclosure plan examples/c_shape.json --top 5 -o plan.json --plot plan/
-  deformclosure plan examples/ring.json --expanding --eps 1e-5
+Examples (pads, the default model, SPEC §6):
+  deformclosure plan examples/notched_bar.json --pad-radius 2 --top 5 -o plan.json --plot plan/
+\b
+Paper model (every pair of perimeter nodes, point jaws, SPEC §4):
+  deformclosure plan examples/c_shape.json --model paper --top 5 -o plan.json --plot plan/
+  deformclosure plan examples/ring.json --model paper --expanding --eps 1e-5
 
 \b
---eps is in joules (default: about 400 lattice values over the separation range);
---min-sep/--max-sep, --region and --jaw-width are in --units (default: the part's).
+--pad-radius/--pad-width, --min-sep/--max-sep, --region and --jaw-width are in --units
+(default: the part's); --eps is in joules (default: about 400 lattice values over the
+separation range).
 """
 
 
 @click.command(epilog=EPILOG)
 @click.argument("part", type=click.Path(dir_okay=False))
+@click.option("--model", type=click.Choice(["pads", "paper"]), default="pads", show_default=True,
+              help="pads: grasp axes for rigid pads (SPEC §6); paper: node pairs (SPEC §4).")
+@click.option("--pad-radius", type=float, default=None,
+              help="pads: radius of the pad ends (default 5 % of the part's diameter).")
+@click.option("--pad-width", type=float, default=0.0, show_default=True,
+              help="pads: width of the flat face (0 = round fingertip).")
+@click.option("--grid-angles", type=int, default=36, show_default=True,
+              help="pads: axis angles (Δθ = 180°/N).")
+@click.option("--grid-offsets", type=int, default=40, show_default=True,
+              help="pads: axis offsets per part diameter.")
 @click.option("--top", type=int, default=10, show_default=True,
-              help="Refine the best N pairs with the exact method.")
+              help="Refine the best N pairs (paper) or axes (pads) with the exact method.")
 @click.option("--eps", type=float, default=None, help="ε of the shared σ lattice, in joules.")
 @click.option("--expanding", is_flag=True, help="Jaws push outward (e.g. from inside a hole).")
 @click.option("--jaw-width", type=float, default=0.0, show_default=True,
@@ -40,9 +54,87 @@ Examples:
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="JSON report (SI units).")
 @click.option("--plot", type=click.Path(file_okay=False), help="Folder for the quality map and top grasps.")
 @click.option("--quiet", is_flag=True, help="No progress bar.")
-def command(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, units, output, plot,
-            quiet) -> int:
-    """Rank all jaw pairs of a part by ε-optimal quality; refine the top ones exactly."""
+def command(part, model, pad_radius, pad_width, grid_angles, grid_offsets, top, eps, expanding,
+            jaw_width, min_sep, max_sep, region, units, output, plot, quiet) -> int:
+    """Rank grasps of a part: grasp axes for pads (default) or jaw node pairs (paper)."""
+    if model == "pads":
+        bad = [n for n, g in (("--eps", eps is not None), ("--expanding", expanding),
+                              ("--jaw-width", jaw_width != 0.0), ("--min-sep", min_sep is not None),
+                              ("--max-sep", max_sep is not None), ("--region", bool(region))) if g]
+        if bad:
+            raise GraspError(f"{bad[0]}: belongs to the paper model; add --model paper")
+        return _pads(part, pad_radius, pad_width, grid_angles, grid_offsets, top, units, output,
+                     plot, quiet)
+    return _paper(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, units, output,
+                  plot, quiet)
+
+
+def _pads(part, pad_radius, pad_width, grid_angles, grid_offsets, top, units, output, plot,
+          quiet) -> int:
+    from ..pads import Pad, PadContact
+    from ..pads.noise import twin_mesh
+    from ..pads.plan import plan_pads
+    from .common import load_part_or_mesh
+
+    if top < 0:
+        raise GraspError(f"--top = {top}: must be >= 0")
+    for name, v in (("--grid-angles", grid_angles), ("--grid-offsets", grid_offsets)):
+        if not (4 <= v <= 2000):
+            raise GraspError(f"{name} = {v}: give a whole number from 4 to 2000")
+    prt, mesh = load_part_or_mesh(part)
+    unit = units or ("m" if prt is None else prt.units)
+    scale = length_scale(unit, "--units")
+    if pad_radius is not None and not (np.isfinite(pad_radius) and pad_radius > 0):
+        raise GraspError(f"--pad-radius = {pad_radius!r}: must be a finite length > 0")
+    if not (np.isfinite(pad_width) and pad_width >= 0):
+        raise GraspError(f"--pad-width = {pad_width!r}: must be a finite length >= 0")
+    rho = 0.05 * mesh.diameter if pad_radius is None else pad_radius * scale
+    pad = Pad(pad_width * scale, rho)
+    bar = None
+
+    def progress(done: int, total: int) -> None:
+        nonlocal bar
+        if quiet:
+            return
+        if bar is None:
+            bar = tqdm(total=total, desc="grasp axes", unit="axis", leave=False)
+        bar.update(done - bar.n)
+
+    twin = PadContact(twin_mesh(prt)) if prt is not None else None
+    try:
+        res = plan_pads(mesh, pad, n_angles=grid_angles, n_offsets=grid_offsets, top=top,
+                        twin=twin, progress=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+    s = 1.0 / length_scale(unit)
+    click.echo(f"{len(res.rows)} grasp axes (pads W = {pad.width * s:.4g}, rho = {pad.radius * s:.4g} {unit})")
+    click.echo(f"{'rank':>4} {'angle':>7} {'contact A (' + unit + ')':>20} {'contact B':>18} "
+               f"{'sigma*':>9} {'Q (J)':>11} {'verdict':>9} {'method':>8}")
+    for i, r in enumerate(res.rows[:max(top, 5)]):
+        ca, cb = (np.asarray(c) * s for c in r["contacts"])
+        ss = "-" if r["sigma_star"] is None else f"{r['sigma_star'] * s:.4g}"
+        click.echo(f"{i + 1:>4} {np.degrees(r['angle']):>6.1f}° {ca[0]:>9.4g},{ca[1]:<9.4g} "
+                   f"{cb[0]:>8.4g},{cb[1]:<8.4g} {ss:>9} {r['quality']:>11.4g} {r['verdict']:>9} "
+                   f"{r['method']:>8}")
+    write_json(res.to_dict(), output)
+    if plot:
+        from pathlib import Path
+
+        from ..plotting.mesh import save_figure
+        from ..plotting.pads import plot_pad_plan
+
+        out = Path(plot)
+        out.mkdir(parents=True, exist_ok=True)
+        ax = plot_pad_plan(res, mesh, units=unit if unit != "m" else "mm")
+        save_figure(ax.figure, out / "top_axes.png")
+        click.echo(f"wrote {out / 'top_axes.png'}")
+    return 0
+
+
+def _paper(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, units, output, plot,
+           quiet) -> int:
+    """The paper's planner over node pairs (SPEC §4), unchanged."""
     from ..planning.plan import plan_grasps
 
     if eps is not None and not (np.isfinite(eps) and eps > 0):
@@ -88,7 +180,9 @@ def command(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, unit
         q, meth = res.quality[i], "exact" if res.exact[i] else "approx"
         sss = "-" if ss is None else f"{ss * s:.5g}"
         click.echo(f"{i + 1:>4} {a:>6} {b:>6} {sss:>14} {q:>12.5g} {meth:>8}")
-    write_json(res.to_dict(), output)
+    report = res.to_dict()
+    report["model"] = "paper"
+    write_json(report, output)
     if plot:
         from ..plotting.grasp import save_plan_plots
 

@@ -205,7 +205,8 @@ class Landscape:
         """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
 
         ``noise`` is the relative noise floor: two energies closer than ``noise`` × the
-        larger are a tie. The start must exceed no neighbour within it (else ``U_A = 0``),
+        larger are a tie. A start with zero energy holds nothing (``U_A = 0``, SPEC §7's
+        released placement). The start must exceed no neighbour within it (else ``U_A = 0``),
         and a barrier within it of the start's energy is no barrier (``U_A = 0``).
         """
         g = self.grid
@@ -217,7 +218,8 @@ class Landscape:
             return E[v]
 
         Us = U(start)
-        if any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)):
+        if Us <= 0.0 or any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)):
+            # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
         best = {start: Us}
         parent: dict[int, int] = {}

@@ -7,7 +7,7 @@ escape runs over the same saddle axis ``w``, ``U_A = U_w − U_s`` is piecewise 
 with the kinks of ``U_w`` and ``U_s``; on each such piece ``Q`` is maximised in closed form
 (ends, stationary points, crossings of ``U_A`` with ``U_L``) and the candidate is then
 checked against ``U_A`` evaluated by its definition. Where the saddle changes, the
-interval is bisected to ``1e-9 σ0``. This is §4's exact algorithm carried over to curves
+interval is bisected to ``1e-7 σ0``. This is §4's exact algorithm carried over to curves
 with several pieces; ``U_A`` can jump where the saddle or the set of equilibria changes.
 """
 
@@ -165,7 +165,7 @@ def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
 
 def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
                   twin: PadContact | None = None, n_angles: int = 48, n_offsets: int = 50, n_samples: int = 48,
-                  n_curve: int = 200, noise: bool = True) -> PadGraspResult:
+                  n_curve: int = 120, noise: bool = True) -> PadGraspResult:
     """Optimal separation of a two-pad grasp on ``axis`` (contracting).
 
     Parameters
@@ -257,7 +257,7 @@ def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
 
     ``best`` is ``(Q*, σ*)`` or ``None`` when ``Q ≡ 0``; ``ev(σ)`` evaluates by definition.
     """
-    tol = 1e-9 * sigma0
+    tol = 1e-7 * sigma0
     evals: dict[float, _Eval] = {}
 
     def ev(sig: float) -> _Eval:

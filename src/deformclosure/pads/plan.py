@@ -136,9 +136,9 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
             top_ = np.maximum(U1, U2)
             rel.append(np.where(top_ > 0, np.abs(U1 - U2) / np.where(top_ > 0, top_, 1.0), np.nan))
         rel = np.array(rel)
-        with np.errstate(all="ignore"):
-            q = np.nanquantile(rel, 0.9, axis=0) if np.isfinite(rel).any() else np.zeros(n_sigma)
-        tau = 2.0 * np.nan_to_num(q)
+        for k in range(n_sigma):
+            col = rel[:, k][np.isfinite(rel[:, k])]
+            tau[k] = 2.0 * float(np.quantile(col, 0.9)) if len(col) else 0.0
     UA = np.zeros_like(E)
     for k in range(n_sigma):
         U = E[:, k]
@@ -148,7 +148,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         for v in range(V):
             nb = A.indices[A.indptr[v]:A.indptr[v + 1]]
             Umin_rel[v] = np.min(U[nb] - tau[k] * U[nb] - U[v])
-        strict = Umin_rel > 0
+        strict = (Umin_rel > 0) & (U > 0)      # zero energy: released, holds nothing
         ua = _kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
         ua[(ua > 0) & np.isfinite(ua) & (ua <= tau[k] * (U + ua))] = 0.0   # ties
         UA[:, k] = ua

@@ -1,0 +1,48 @@
+"""``--model paper`` (SPEC §4) gives the reports it gave before the pad model existed.
+
+The golden reports in ``tests/golden/`` were written by the code of commit d47a0b9 (the
+last one before pads became the default) with the same commands; every key and every
+number must be identical now, except the wall-clock timings. The only addition allowed is
+the ``model`` key.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from deformclosure.cli.main import main
+
+ROOT = Path(__file__).resolve().parents[1]
+GOLDEN = ROOT / "tests" / "golden"
+
+CASES = [
+    ("paper_rectangle", ["optimize", "examples/rectangle.json", "--at", "0,10", "12,10"]),
+    ("paper_l_shape", ["optimize", "examples/l_shape.json", "--jaws", "0", "132"]),
+    ("paper_c_shape", ["optimize", "examples/c_shape.json", "--jaws", "65", "157"]),
+    ("paper_dogbone", ["optimize", "examples/dogbone.json", "--jaws", "151", "8", "--method", "approx"]),
+    ("paper_ring", ["optimize", "examples/ring.json", "--at", "1.5,0", "-1.5,0", "--expanding"]),
+    ("paper_plan_c_shape", ["plan", "examples/c_shape.json", "--top", "3", "--quiet"]),
+]
+
+
+def _without_timings(obj):
+    if isinstance(obj, dict):
+        return {k: _without_timings(v) for k, v in obj.items() if k not in ("timings_s", "seconds")}
+    if isinstance(obj, list):
+        return [_without_timings(v) for v in obj]
+    return obj
+
+
+@pytest.mark.parametrize("name,args", CASES, ids=[c[0] for c in CASES])
+def test_paper_report_identical_to_before_pads(name, args, tmp_path, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    out = tmp_path / "r.json"
+    cmd, rest = args[0], args[1:]
+    assert main([cmd, rest[0], "--model", "paper", *rest[1:], "-o", str(out)]) == 0
+    new = json.loads(out.read_text())
+    old = json.loads((GOLDEN / f"{name}.json").read_text())
+    assert new.pop("model") == "paper"
+    assert _without_timings(new) == _without_timings(old)
