@@ -164,3 +164,66 @@ def test_quality_and_sigma_star_converge(name, outer, material, area, p, q, pad)
     assert ext - err <= Q[-1] <= ext + err
     est = res.error_estimate()
     assert est["quality"] == pytest.approx(err) and est["sigma_star"] is not None
+
+
+# --------------------------------------------------------------------------- expanding
+PLATE = [[0, 0], [30, 0], [30, 20], [0, 20]]
+PLATE_MAT = dict(RUBBER, poisson_ratio=0.3, elastic_limit_strain=0.5)
+
+
+def _plate(hole, area=0.2):
+    return dc.Part.from_dict({"name": "plate", "units": "mm", "outer": PLATE, "holes": [hole],
+                              "material": PLATE_MAT, "mesh": {"max_area": area}})
+
+
+def _expand(part, p, q, pad):
+    mid = 0.5 * (np.array(p) + np.array(q)) * MM
+    return pad_grasp(part, GraspAxis.through(np.array(p) * MM, np.array(q) * MM), pad,
+                     expanding_from=mid).finest
+
+
+def test_pads_opening_into_the_corners_of_a_rhombus_hole_hold():
+    """Opened along the long diagonal, round pads sit in the acute corners: a sideways
+    shift or a turn shortens the chord, so the pads must squeeze harder to leave."""
+    r = _expand(_plate([[8, 10], [15, 13], [22, 10], [15, 7]]), [8, 10], [22, 10], Pad(0, 1 * MM))
+    assert r.start_curve.expanding and r.sigma_star > r.sigma0 and r.sigma_L > r.sigma_star
+    assert r.verdict == "held" and r.U_A > 50 * r.noise
+
+
+ROUND_HOLE = (np.array(_ellipse(4, 4, 64)) + [15, 10]).round(6).tolist()
+
+
+@pytest.mark.parametrize("hole,p,q,pad", [
+    ([[10, 5], [20, 5], [20, 15], [10, 15]], [10, 10], [20, 10], Pad(4 * MM, 2 * MM)),
+    (ROUND_HOLE, [11, 10], [19, 10], Pad(0, 1 * MM)),
+], ids=["square hole, flat pads", "round hole"])
+def test_pads_opening_in_a_hole_they_can_slide_or_turn_in_do_not_hold(hole, p, q, pad):
+    """Flat pads on the parallel walls of a square hole slide along them; round pads in a
+    round hole turn freely about its centre."""
+    assert _expand(_plate(hole), p, q, pad).verdict == "not held"
+
+
+def test_expanding_curve_is_an_exact_contact_solution():
+    """Opening curves obey what any frictionless contact solution must: U ≥ 0, increasing
+    and convex in σ beyond σ0, dU/dσ = F on every piece (envelope), U = ½ Σ f·u."""
+    part = _plate([[8, 10], [15, 13], [22, 10], [15, 7]], area=0.4)
+    mesh = dc.mesh_part(part)
+    pc = PadContact(mesh)
+    from deformclosure.pads.contact import hole_containing
+    hole = hole_containing(mesh, [0.015, 0.010])
+    for ang, pad in ((0.0, Pad(0, 1 * MM)), (0.3, Pad(1 * MM, 0.8 * MM))):
+        c = pc.curve(GraspAxis.at([0.015, 0.010], ang), pad, 0.020, hole)
+        assert c.expanding and c.path is not None
+        sig = np.linspace(c.sigma0, c.sigma_end, 301)
+        U = c.energy(sig)
+        assert np.all(U >= 0) and np.all(np.diff(U) >= -1e-15) and np.all(np.diff(U, 2) >= -1e-12 * U.max())
+        k = c.kinks()
+        mids = 0.5 * (k[:-1] + k[1:])
+        h = 1e-7 * (c.sigma_end - c.sigma0)
+        for m in mids[np.diff(k) > 4 * h]:
+            dU = (c.energy_at(m + h) - c.energy_at(m - h)) / (2 * h)
+            assert dU == pytest.approx(c.axial_force(m), rel=1e-5)
+        m = float(mids[-1])
+        lam = c.path.multipliers(c.delta(m))
+        f = pc.load_vector(c, lam)
+        assert 0.5 * f @ pc.displacement(f) == pytest.approx(c.energy_at(m), rel=1e-9)

@@ -86,7 +86,9 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
 @click.option("--eps", type=float, default=None,
               help="paper model, --method approx: ε in joules (default 1e-3 · ½ k01 (σ0 − σ_L)², "
                    "or larger if needed for at most 20 000 grid steps).")
-@click.option("--expanding", is_flag=True, help="paper model: jaws push outward (e.g. from inside a hole).")
+@click.option("--expanding", is_flag=True,
+              help="Jaws push outward from inside a hole (pads: the hole holding the --at "
+                   "mid-point or the --axis point).")
 @click.option("--jaw-width", type=float, default=0.0, show_default=True,
               help="paper model: jaw contact width (0 = point jaws).")
 @click.option("--units", type=str, default=None, help="Unit of the lengths given here (m, cm, mm, in).")
@@ -103,7 +105,7 @@ def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_ang
     if model == "paper":
         return _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot,
                       export_graph)
-    bad = [name for name, given in (("--jaws", jaws is not None), ("--expanding", expanding),
+    bad = [name for name, given in (("--jaws", jaws is not None),
                                     ("--jaw-width", jaw_width != 0.0), ("--eps", eps is not None),
                                     ("--export-graph", export_graph is not None),
                                     ("--method", method != "exact")) if given]
@@ -111,7 +113,7 @@ def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_ang
         raise GraspError(f"{bad[0]}: belongs to the paper model; add --model paper, or give the "
                          "pads an axis with --at X,Y X,Y or --axis X,Y,DEG")
     return _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-                 output, plot, quiet)
+                 output, plot, quiet, expanding)
 
 
 def parse_axis(at, axis, scale: float):
@@ -134,7 +136,7 @@ def parse_axis(at, axis, scale: float):
 
 
 def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-          output, plot, quiet) -> int:
+          output, plot, quiet, expanding=False) -> int:
     from ..pads import Pad, pad_grasp
     from .common import load_part_or_mesh
 
@@ -159,8 +161,14 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
         if not quiet and n > 1:
             click.echo(f"mesh {k + 1} of {n} ...", err=True)
 
+    start = None
+    if expanding:
+        if at is not None:
+            start = 0.5 * sum(np.array(parse_xy(v, "--at")) for v in at) * scale
+        else:
+            start = np.array([float(v) for v in axis.split(",")[:2]]) * scale
     res = pad_grasp(prt, ax, pad, mesh=mesh, refine=refine, progress=progress,
-                    n_angles=grid_angles, n_offsets=grid_offsets)
+                    expanding_from=start, n_angles=grid_angles, n_offsets=grid_offsets)
     report = res.to_dict()
     fine = res.finest
     s = 1.0 / length_scale(unit)

@@ -33,7 +33,17 @@ from ..elasticity.stiffness import stiffness_matrix
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 from .homotopy import ContactPath, trace_contact_path
 
-__all__ = ["PadContact", "GraspCurve", "nodal_areas"]
+__all__ = ["PadContact", "GraspCurve", "nodal_areas", "hole_containing"]
+
+
+def hole_containing(mesh, point) -> int | None:
+    """Index (into ``mesh.hole_loops``) of the hole containing ``point`` (m), or None."""
+    import shapely
+
+    for k, lp in enumerate(mesh.hole_loops):
+        if shapely.contains_xy(shapely.Polygon(mesh.nodes[lp]), float(point[0]), float(point[1])):
+            return k
+    return None
 
 
 def nodal_areas(mesh) -> np.ndarray:
@@ -73,47 +83,60 @@ class GraspCurve:
 
     @property
     def sigma0(self) -> float:
-        """Closing width at first touch (m); ``nan`` if the pads miss the part."""
+        """Closing (opening) width at first touch (m); ``nan`` if the pads miss the part."""
         return self.touch.sigma0 if self.touch is not None else float("nan")
 
     @property
-    def sigma_min(self) -> float:
-        """Smallest separation (m) the curve is traced to."""
+    def expanding(self) -> bool:
+        """Whether the pads open inside a hole (squeeze ``δ = σ − σ0``)."""
+        return self.touch is not None and self.touch.expanding
+
+    def delta(self, sigma):
+        """Squeeze ``δ`` (m) at separation ``sigma``: ``σ0 − σ``, or ``σ − σ0`` expanding."""
+        return (sigma - self.touch.sigma0) if self.touch.expanding else (self.touch.sigma0 - sigma)
+
+    def sigma_at(self, delta):
+        """Separation (m) at squeeze ``delta`` (m)."""
+        return (self.touch.sigma0 + delta) if self.touch.expanding else (self.touch.sigma0 - delta)
+
+    @property
+    def sigma_end(self) -> float:
+        """Far end (m) of the traced range (smallest σ, or largest when expanding)."""
         if self.path is None:
             return -np.inf if self.touch is None else self.sigma0
-        return self.sigma0 - float(self.path.delta[-1])
+        return self.sigma_at(float(self.path.delta[-1]))
 
     def energy(self, sigma: np.ndarray | float) -> np.ndarray:
         """Energy (J) at separations ``sigma`` (m)."""
         sigma = np.asarray(sigma, float)
         if self.path is None:
             return np.zeros_like(sigma)
-        return self.path.energy(self.sigma0 - sigma)
+        return self.path.energy(self.delta(sigma))
 
     def energy_at(self, sigma: float) -> float:
         """Energy (J) at one separation ``sigma`` (m) (scalar fast path of :meth:`energy`)."""
         if self.path is None:
             return 0.0
-        return self.path.energy_at(self.touch.sigma0 - sigma)
+        return self.path.energy_at(self.delta(sigma))
 
     def kinks(self) -> np.ndarray:
-        """Separations (m) where the active contact set changes, decreasing."""
+        """Separations (m) where the active contact set changes, from first touch on."""
         if self.path is None:
             return np.zeros(0)
-        return self.sigma0 - self.path.delta
+        return self.sigma_at(self.path.delta)
 
     def forces(self, sigma: float) -> np.ndarray:
         """Contact forces on the part (N), shape (m, 2), at separation ``sigma`` (m)."""
         if self.path is None:
             return np.zeros((0, 2))
-        lam = self.path.multipliers(self.sigma0 - sigma)
+        lam = self.path.multipliers(self.delta(sigma))
         return lam[:, None] * self.normals
 
     def axial_force(self, sigma: float) -> float:
         """Squeezing force (N) of each pad along the axis at ``sigma`` (m)."""
         if self.path is None:
             return 0.0
-        lam = self.path.multipliers(self.sigma0 - sigma)
+        lam = self.path.multipliers(self.delta(sigma))
         on_a = self.pad_of == 0
         return float(lam[on_a] @ (self.normals[on_a] @ self.axis.direction))
 
@@ -169,14 +192,40 @@ class PadContact:
         v = self.cc.solve(fp)
         return v - R @ (H @ (MR.T @ v))
 
-    def curve(self, axis: GraspAxis, pad: Pad, sigma_min: float) -> GraspCurve:
-        """The exact energy curve of ``axis`` from first touch down to ``sigma_min`` (m)."""
-        touch = first_touch(self._ring, axis, pad)
+    def hole_start(self, axis: GraspAxis, hole: int) -> float | None:
+        """Expanding grasps: axial coordinate (m) where the pads start in hole ``hole`` —
+        the axis point nearest the hole's centroid — or ``None`` if it is not inside."""
+        import shapely
+
+        poly = shapely.Polygon(self.mesh.nodes[self.mesh.hole_loops[hole]])
+        c = np.array(poly.centroid.coords[0])       # of the polygon: mesh-independent
+        s0 = float((c - np.asarray(axis.origin)) @ axis.direction)
+        p = np.asarray(axis.origin) + s0 * axis.direction + axis.offset * axis.normal
+        if not shapely.contains_xy(poly, p[0], p[1]):
+            return None
+        return s0
+
+    def curve(self, axis: GraspAxis, pad: Pad, sigma_end: float,
+              hole: int | None = None) -> GraspCurve:
+        """The exact energy curve of ``axis`` from first touch to ``sigma_end`` (m).
+
+        Contracting (``hole=None``): the pads close from outside, ``σ`` down to
+        ``sigma_end``. Expanding: the pads open from inside hole ``hole`` (index into
+        ``mesh.hole_loops``), ``σ`` up to ``sigma_end``.
+        """
+        empty = GraspCurve(axis, pad, None, np.zeros(0, int), np.zeros(0, int),
+                           np.zeros((0, 2)), None)
+        if hole is None:
+            loop = self.mesh.outer_loop
+            touch = first_touch(self._ring, axis, pad)
+        else:
+            loop = self.mesh.hole_loops[hole]
+            start = self.hole_start(axis, hole)
+            touch = None if start is None else first_touch(self.mesh.nodes[loop], axis, pad, start)
         if touch is None:
-            return GraspCurve(axis, pad, None, np.zeros(0, int), np.zeros(0, int),
-                              np.zeros((0, 2)), None)
-        delta_max = max(touch.sigma0 - sigma_min, 0.0)
-        loop = self.mesh.outer_loop
+            return empty
+        delta_max = max((sigma_end - touch.sigma0) if touch.expanding
+                        else (touch.sigma0 - sigma_end), 0.0)
         s, x = axis.coordinates(self.mesh.nodes[loop])
         d, slope = pad.profile(x)
         inside = np.isfinite(d)
@@ -184,6 +233,10 @@ class PadContact:
         gA = s - touch.z_a + d
         gB = touch.z_b + d - s
         tol = 1e-10 * self.diameter
+        if touch.expanding:
+            # Only the ring ahead of each pad can be touched by it.
+            gA = np.where(gA >= -1e-9 * self.diameter, gA, np.inf)
+            gB = np.where(gB >= -1e-9 * self.diameter, gB, np.inf)
         # Contacts that could close within the squeeze; verified afterwards.
         cutoff = 2.0 * delta_max + tol
         for _ in range(6):
@@ -233,7 +286,11 @@ class PadContact:
         # Nodes whose rest gap exceeds four times the squeeze cannot close: boundary
         # displacements stay of the order of the squeeze.
         far = 4.0 * float(path.delta[-1]) + tol
-        check = np.flatnonzero(inside & ((s - touch.z_a + d <= far) | (touch.z_b + d - s <= far)))
+        ga, gb = s - touch.z_a + d, touch.z_b + d - s
+        if touch.expanding:   # the ring behind a pad is not its concern
+            ga = np.where(ga >= -1e-9 * self.diameter, ga, np.inf)
+            gb = np.where(gb >= -1e-9 * self.diameter, gb, np.inf)
+        check = np.flatnonzero(inside & ((ga <= far) | (gb <= far)))
         if len(check) == 0:
             return 0.0
         pos_c = self.cc.position(curve.nodes)
@@ -244,18 +301,18 @@ class PadContact:
         u = (Fc @ self.Y[np.ix_(cd, ld)]).reshape(len(path.delta), len(check), 2)
         a, n = curve.axis.direction, curve.axis.normal
         ua, un = u @ a, u @ n
-        sc, dc, slc = s[check], d[check], slope[check]
+        slc = slope[check]
         D = path.delta[:, None]
         t = path.t[:, None]
-        rest_a = sc - touch.z_a + dc
-        rest_b = touch.z_b + dc - sc
+        rest_a = ga[check]
+        rest_b = gb[check]
         gA = rest_a + ua + slc * un + t
         gB = rest_b - D - ua + slc * un - t
         worst = 0.0
         for g, rest, p in ((gA, rest_a, 0), (gB, rest_b, 1)):
             cand[:] = False
             cand[curve.nodes[curve.pad_of == p]] = True
-            bad = ~cand[loop[check]] & (g.min(axis=0) < -tol)
+            bad = ~cand[loop[check]] & (g.min(axis=0) < -tol) & np.isfinite(rest)
             if bad.any():
                 worst = max(worst, float(rest[bad].max()))
         return worst

@@ -146,10 +146,17 @@ class GraspAxis:
 class FirstTouch:
     """Where the pads first touch the part when closing along an axis (rest geometry).
 
+    Contracting, pad A comes from ``−a`` and pad B from ``+a``. Expanding (pads opening
+    inside a hole from a start point), pad A moves towards ``+a`` and pad B towards
+    ``−a``; each has the same gap formula as its contracting namesake, so one contact
+    solver serves both.
+
     Attributes
     ----------
     z_a, z_b : float
         Face positions (m, along the axis) of pads A and B at first touch.
+    expanding : bool
+        Whether the pads open inside a hole.
     contact_a, contact_b : ndarray, shape (2,)
         Rest contact points (m): the middle of the touching set of each pad.
     """
@@ -158,11 +165,12 @@ class FirstTouch:
     z_b: float
     contact_a: np.ndarray
     contact_b: np.ndarray
+    expanding: bool = False
 
     @property
     def sigma0(self) -> float:
-        """Closing width at first touch (m)."""
-        return self.z_b - self.z_a
+        """Closing (or, expanding, opening) width at first touch (m)."""
+        return self.z_a - self.z_b if self.expanding else self.z_b - self.z_a
 
 
 def _edge_minima(s0, s1, x0, x1, pad: Pad, tol: float):
@@ -187,21 +195,27 @@ def _edge_minima(s0, s1, x0, x1, pad: Pad, tol: float):
     return f, ss, xs
 
 
-def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad) -> FirstTouch | None:
-    """Exact first touch of both pads with a closed ring (the part's outer boundary).
+def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad,
+                start: float | None = None) -> FirstTouch | None:
+    """Exact first touch of both pads with a closed ring.
 
     Parameters
     ----------
     ring : ndarray, shape (k, 2)
-        Outer ring of the part (m), not closed.
+        The part's outer ring (contracting) or the hole ring the pads open in (expanding),
+        m, not closed.
     axis : GraspAxis
     pad : Pad
+    start : float, optional
+        Expanding grasps: the axial coordinate ``s`` (m) where the pads start, back to
+        back, inside the hole. Pad A then meets the ring ahead of it (``s + d ≥ start``),
+        pad B the ring behind it.
 
     Returns
     -------
     FirstTouch or None
         ``None`` when the pads miss the part (no boundary point within ``W/2 + ρ`` of the
-        axis).
+        axis) or, expanding, when a pad does not fit in the hole at the start.
     """
     ring = np.asarray(ring, float)
     s, x = axis.coordinates(ring)
@@ -211,6 +225,16 @@ def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad) -> FirstTouch | Non
     out = []
     for sign in (1.0, -1.0):   # pad A minimises s + d(x); pad B maximises s − d(x)
         f, ss, xs = _edge_minima(sign * s, sign * s1, x, x1, pad, tol)
+        if start is not None:
+            # Only the ring ahead of each pad; an edge that passes from behind the face to
+            # ahead of it inside the pad's span means the pad does not fit at the start.
+            front = sign * start - tol
+            finite = np.isfinite(f)
+            behind = (finite & (f < front)).any(axis=1)
+            ahead = (finite & (f >= front)).any(axis=1)
+            if np.any(behind & ahead):
+                return None
+            f = np.where(f >= front, f, np.inf)
         best = float(f.min())
         if not np.isfinite(best):
             return None
@@ -221,4 +245,4 @@ def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad) -> FirstTouch | Non
         out.append((sign * best, np.asarray(axis.origin) + sm * axis.direction
                     + (xm + axis.offset) * axis.normal))
     (za, pa), (zb, pb) = out
-    return FirstTouch(za, zb, pa, pb)
+    return FirstTouch(za, zb, pa, pb, start is not None)

@@ -142,14 +142,19 @@ class Landscape:
     solver : PadContact
     pad : Pad
     grid : AxisGrid
-    sigma_min : float
-        Smallest separation (m) any query will use; curves are traced down to it.
+    sigma_end : float
+        Separation (m) at the far end of every query (smallest σ; largest, expanding);
+        curves are traced to it.
+    hole : int, optional
+        Expanding grasps: the hole the pads open in.
     """
 
-    def __init__(self, solver: PadContact, pad: Pad, grid: AxisGrid, sigma_min: float) -> None:
-        self.solver, self.pad, self.grid, self.sigma_min = solver, pad, grid, sigma_min
+    def __init__(self, solver: PadContact, pad: Pad, grid: AxisGrid, sigma_end: float,
+                 hole: int | None = None) -> None:
+        self.solver, self.pad, self.grid, self.sigma_end = solver, pad, grid, sigma_end
+        self.hole = hole
         self._curves: dict[int, GraspCurve] = {}
-        self.twin: "Landscape | None" = None
+        self.twin: Landscape | None = None
         self._measured: list[int] = []
         self.noise_factor = 2.0
 
@@ -179,16 +184,16 @@ class Landscape:
         U1 = np.array([self.energy(v, sigma) for v in self._measured])
         U2 = np.array([self.twin.energy(v, sigma) for v in self._measured])
         top = np.maximum(U1, U2)
-        ok = top > 0
+        ok = (top > 0) & np.isfinite(top)
         if not ok.any():
             return 0.0
-        return self.noise_factor * float(np.quantile(np.abs(U1 - U2)[ok] / top[ok], 0.9))
+        return self.noise_factor * float(np.quantile(np.abs(U1[ok] - U2[ok]) / top[ok], 0.9))
 
     def curve(self, v: int) -> GraspCurve:
         """The exact energy curve of vertex ``v`` (computed once)."""
         c = self._curves.get(v)
         if c is None:
-            c = self.solver.curve(self.grid.axis(v), self.pad, self.sigma_min)
+            c = self.solver.curve(self.grid.axis(v), self.pad, self.sigma_end, self.hole)
             self._curves[v] = c
         return c
 
@@ -198,8 +203,15 @@ class Landscape:
         return len(self._curves)
 
     def energy(self, v: int, sigma: float) -> float:
-        """Energy (J) of vertex ``v`` at separation ``sigma`` (m)."""
-        return self.curve(v).energy_at(sigma)
+        """Energy (J) of vertex ``v`` at separation ``sigma`` (m).
+
+        Expanding grasps: an axis where the pads do not fit in the hole (or miss its
+        centre) is out of reach — the hole's walls stop the pads — so its energy is ``inf``.
+        """
+        c = self.curve(v)
+        if self.hole is not None and c.touch is None:
+            return math.inf
+        return c.energy_at(sigma)
 
     def release(self, start: int, sigma: float, noise: float = 0.0) -> Release:
         """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
@@ -218,7 +230,8 @@ class Landscape:
             return E[v]
 
         Us = U(start)
-        if Us <= 0.0 or any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)):
+        if Us <= 0.0 or any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)
+                            if math.isfinite(U(w))):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
         best = {start: Us}
@@ -241,7 +254,7 @@ class Landscape:
                 return Release(b - Us, True, saddle, path)
             for w in nbrs:
                 nb = max(b, U(w))
-                if nb < best.get(w, math.inf):
+                if nb < best.get(w, math.inf):      # never through an unreachable axis
                     best[w] = nb
                     parent[w] = v
                     heapq.heappush(heap, (nb, next(count), w))

@@ -33,7 +33,8 @@ class PadLimit:
     Attributes
     ----------
     sigma_L : float
-        Separation (m) where the averaged strain reaches ``e_L`` (0 if it never does).
+        Separation (m) where the averaged strain reaches ``e_L`` (contracting: 0 if it
+        never does; otherwise the end of the traced range).
     critical_distance : float
         ``ℓ`` (m).
     critical_element : int
@@ -64,8 +65,8 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     ----------
     solver : PadContact
     curve : GraspCurve
-        Traced far enough (``curve.sigma_min`` small); if ``e_L`` is not reached on the
-        traced range, ``σ_L`` is the end of that range.
+        Traced far enough (``curve.sigma_end``); if ``e_L`` is not reached on the traced
+        range, ``σ_L`` is the end of that range.
     e_L : float
         Elastic-limit strain.
     ell : float, optional
@@ -87,7 +88,7 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     if len(above) == 0:
         j = len(e_bp) - 1
         elem = int(np.argmax(_magnitudes(Ebar[j])))
-        return PadLimit(curve.sigma_min, ell, elem, e_bp, float(_magnitudes(E[j]).max()))
+        return PadLimit(curve.sigma_end, ell, elem, e_bp, float(_magnitudes(E[j]).max()))
     j = int(above[0])
     if j == 0:
         s_lo = s_hi = 0.0
@@ -105,5 +106,5 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     delta = (1 - s) * path.delta[i0] + s * path.delta[i1]
     Tbar = (1 - s) * Ebar[i0] + s * Ebar[i1]
     T = (1 - s) * E[i0] + s * E[i1]
-    return PadLimit(max(curve.sigma0 - delta, 0.0), ell, int(np.argmax(_magnitudes(Tbar))), e_bp,
-                    float(_magnitudes(T).max()))
+    return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell, int(np.argmax(_magnitudes(Tbar))),
+                    e_bp, float(_magnitudes(T).max()))

@@ -60,7 +60,8 @@ def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
 
 
 def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
-                 d_angle: float, sigma_min: float, n: int = 9, factor: float = 4.0):
+                 d_angle: float, sigma_end: float, n: int = 9, factor: float = 4.0,
+                 hole: int | None = None):
     """Noise floor from the jitter of the energy under sub-cell moves of ``axis``.
 
     The axis is shifted across itself and turned in ``n`` steps spanning one grid cell
@@ -77,10 +78,10 @@ def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
     curves = []
     for t in ts:
         curves.append(solver.curve(GraspAxis(axis.angle, axis.offset + t * d_offset, axis.origin),
-                                   pad, sigma_min))
+                                   pad, sigma_end, hole))
     for t in ts:
         curves.append(solver.curve(GraspAxis.at(axis.point, axis.angle + t * d_angle, axis.origin),
-                                   pad, sigma_min))
+                                   pad, sigma_end, hole))
     V = np.vander(ts, 3)
     proj = np.eye(n) - V @ np.linalg.pinv(V)      # residual of the least-squares quadratic
 

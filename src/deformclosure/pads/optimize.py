@@ -164,7 +164,8 @@ def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
 
 
 def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
-                  twin: PadContact | None = None, n_angles: int = 48, n_offsets: int = 50, n_samples: int = 48,
+                  twin: PadContact | None = None, hole: int | None = None,
+                  twin_hole: int | None = None, n_angles: int = 48, n_offsets: int = 50, n_samples: int = 48,
                   n_curve: int = 120, noise: bool = True) -> PadGraspResult:
     """Optimal separation of a two-pad grasp on ``axis`` (contracting).
 
@@ -183,6 +184,9 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         Initial σ samples of the exact search.
     n_curve : int
         Samples of the plotted curve.
+    hole, twin_hole : int, optional
+        Expanding grasp: the pads open inside this hole of ``mesh`` (of ``twin``),
+        starting at the axis point nearest the hole's centroid; ``σ`` grows from ``σ0``.
     twin : PadContact, optional
         The same part meshed as a second realisation (:func:`.noise.twin_mesh`); its
         energies at the start axis and its neighbours give the noise floor. Without it,
@@ -199,9 +203,19 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
                          "with a material")
     solver = PadContact(mesh) if solver is None else solver
     ax0 = GraspAxis(axis.angle, axis.offset, axis.origin)
-    start_curve = solver.curve(ax0, pad, 0.0)
+    if hole is None:
+        start_curve = solver.curve(ax0, pad, 0.0)
+    else:
+        # Open up to three times the rest width, or until the elastic limit (below).
+        touch = solver.curve(ax0, pad, -np.inf, hole)
+        start_curve = touch if touch.touch is None else solver.curve(ax0, pad, 3 * touch.sigma0, hole)
     if start_curve.touch is None:
-        raise GraspError("axis: the pads miss the part on this axis; move the axis onto the part")
+        where = ("the pads miss the part on this axis; move the axis onto the part" if hole is None
+                 else "the pads do not fit in the hole on this axis, or the axis misses its centre")
+        raise GraspError(f"axis: {where}")
+    if start_curve.path is None:
+        raise GraspError("axis: no mesh node within the pads' reach at first touch; refine the "
+                         "mesh (mesh.max_area) or use larger pads")
     sigma0 = start_curve.sigma0
     limit = pad_elastic_limit(solver, start_curve, mesh.material.elastic_limit_strain)
     sigma_L = limit.sigma_L
@@ -211,7 +225,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     ring = mesh.nodes[mesh.outer_loop]
     reach = float(np.linalg.norm(ring - cen, axis=1).max()) + pad.half_span
     grid = AxisGrid.around(start_axis, reach, mesh.diameter, n_angles, n_offsets)
-    land = Landscape(solver, pad, grid, sigma_L)
+    land = Landscape(solver, pad, grid, sigma_L, hole)
     s = grid.vertex(0, 0)
     land._curves[s] = start_curve
     Us = start_curve.energy_at
@@ -222,16 +236,17 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         # Two views of the noise: the jitter under sub-cell moves of the start axis (the
         # nodes' positions under the pads) and, with a twin, the spread between two mesh
         # realisations over every axis the search compares. The larger counts.
-        jitter = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L)
-        if twin is not None:
-            land.twin = Landscape(twin, pad, grid, sigma_L)
+        jitter = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L,
+                              hole=hole)
+        if twin is not None and (hole is None or twin_hole is not None):
+            land.twin = Landscape(twin, pad, grid, sigma_L, twin_hole)
         tau = lambda sig: max(jitter(sig), land.noise(sig))  # noqa: E731
     U_sL = float(Us(sigma_L))
     # With a twin the noise floor grows as the search visits more axes: repeat the search
     # until every axis it compares has been measured on both realisations.
     for _ in range(4):
         best, ev = _search_sigma_star(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples)
-        if twin is None or not noise or not land.measure_noise():
+        if land.twin is None or not noise or not land.measure_noise():
             break
     sigma_star = None if best is None else best[1]
     e_star = ev(sigma0 if sigma_star is None else sigma_star)
@@ -269,13 +284,16 @@ def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
         return U_sL - float(Us(x))
 
     kinks = land.curve(s).kinks()
-    xs = sorted(set(np.linspace(sigma_L, sigma0, n_samples).tolist())
-                | set(k for k in kinks.tolist() if sigma_L < k < sigma0))
+    lo, hi = min(sigma_L, sigma0), max(sigma_L, sigma0)
+    xs = sorted(set(np.linspace(lo, hi, n_samples).tolist())
+                | set(k for k in kinks.tolist() if lo < k < hi))
     best: tuple[float, float] | None = None   # (Q, σ)
+    closer = 1.0 if sigma0 >= sigma_L else -1.0  # on ties, the least squeeze (nearer σ0)
 
     def consider(sig: float, Q: float) -> None:
         nonlocal best
-        if Q > 0 and (best is None or Q > best[0] or (Q == best[0] and sig > best[1])):
+        if Q > 0 and (best is None or Q > best[0]
+                      or (Q == best[0] and closer * sig > closer * best[1])):
             best = (Q, sig)
 
     for x in xs:

@@ -119,7 +119,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         if progress is not None:
             progress(v + 1, V)
     sig0 = np.array([c.sigma0 if c.touch is not None else np.nan for c in curves])
-    lo = float(np.nanmin([c.sigma_min for c in curves if c.touch is not None]))
+    lo = float(np.nanmin([c.sigma_end for c in curves if c.touch is not None]))
     hi = float(np.nanmax(sig0))
     lattice = np.linspace(lo, hi, n_sigma)
     E = np.array([c.energy(lattice) for c in curves])            # (V, K)
@@ -131,7 +131,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
                                                        min(noise_samples, len(touching)))]
         rel = []
         for v in pick:
-            c2 = twin.curve(grid.axis(v), pad, curves[v].sigma_min)
+            c2 = twin.curve(grid.axis(v), pad, curves[v].sigma_end)
             U1, U2 = E[v], c2.energy(lattice)
             top_ = np.maximum(U1, U2)
             rel.append(np.where(top_ > 0, np.abs(U1 - U2) / np.where(top_ > 0, top_, 1.0), np.nan))

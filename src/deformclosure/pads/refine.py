@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import GraspError
 from ..mesh import mesh_part
 from ..mesh.generate import default_max_area
-from .contact import PadContact
+from .contact import PadContact, hole_containing
 from .geometry import GraspAxis, Pad
 from .noise import twin_mesh
 from .optimize import PadGraspResult, optimize_pads
@@ -114,7 +114,8 @@ class RefinedPadGrasp:
 
 
 def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
-              twin: bool = True, progress=None, **options) -> RefinedPadGrasp:
+              twin: bool = True, expanding_from=None, progress=None,
+              **options) -> RefinedPadGrasp:
     """Optimal separation of a pad grasp, on one mesh or a refinement sequence.
 
     Parameters
@@ -129,6 +130,8 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
         Number of meshes (``max_area`` quartered each time), 1 to 5.
     twin : bool
         Measure the noise floor on a second mesh realisation (needs ``part``).
+    expanding_from : array_like, optional
+        Expanding grasp: a point (m) inside the hole the pads open in.
     progress : callable, optional
         Called with ``(level, n_levels)`` before each level.
     **options
@@ -150,6 +153,13 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
         area = base / 4.0**k
         m = mesh if k == 0 else mesh_part(part, max_area=area)
         tw = PadContact(twin_mesh(part, max_area=area)) if (twin and part is not None) else None
-        levels.append(optimize_pads(m, axis, pad, twin=tw, **options))
+        holes = {}
+        if expanding_from is not None:
+            holes["hole"] = hole_containing(m, expanding_from)
+            if holes["hole"] is None:
+                raise GraspError("--expanding: the axis point is not inside a hole of the part; "
+                                 "give --at points on a hole's boundary or an --axis point in it")
+            holes["twin_hole"] = None if tw is None else hole_containing(tw.mesh, expanding_from)
+        levels.append(optimize_pads(m, axis, pad, twin=tw, **holes, **options))
         areas.append(area)
     return RefinedPadGrasp(levels, areas)

@@ -48,6 +48,8 @@ Examples
 
 from __future__ import annotations
 
+import math
+
 import concurrent.futures as cf
 import csv
 import hashlib
@@ -1078,9 +1080,10 @@ def read_results(db_path: str | os.PathLike, status: str | None = None) -> list[
 
 
 #: Scalar fields of the reports shown by ``results`` (SI units, SPEC §5).
-_FIELDS = ("sigma_star", "quality", "U_A", "U_L", "sigma_L", "deform_closure", "order",
-           "energy", "n_pairs", "top_a", "top_b", "top_sigma_star", "top_quality",
-           "n_nodes", "n_triangles")
+_SCALARS = ("model", "verdict", "sigma_star", "quality", "U_A", "U_L", "sigma_L",
+            "deform_closure", "order", "energy")
+_FIELDS = (*_SCALARS, "n_pairs", "top_a", "top_b", "n_axes", "top_angle", "top_point",
+           "top_sigma_star", "top_quality", "n_nodes", "n_triangles")
 
 
 def result_summary(result: dict | None) -> dict:
@@ -1089,10 +1092,12 @@ def result_summary(result: dict | None) -> dict:
     Parameters
     ----------
     result : dict or None
-        A report of ``optimize`` (``sigma_star``, ``quality``, ``U_A``, ``U_L``,
-        ``sigma_L``), ``check`` (``deform_closure``, ``order``, ``energy``), ``plan``
-        (``n_pairs`` and the best pair: ``top_a``, ``top_b``, ``top_sigma_star``,
-        ``top_quality``) or ``mesh`` (``n_nodes``, ``n_triangles``).
+        A report of ``optimize`` (``model``, ``verdict``, ``sigma_star``, ``quality``,
+        ``U_A``, ``U_L``, ``sigma_L``), ``check`` (``deform_closure``, ``order``,
+        ``energy``), ``plan`` (paper: ``n_pairs`` and the best pair: ``top_a``, ``top_b``,
+        ``top_sigma_star``, ``top_quality``; pads: ``n_axes`` and the best axis:
+        ``top_angle`` (rad), ``top_point`` ("x y", m), ``top_sigma_star``, ``top_quality``)
+        or ``mesh`` (``n_nodes``, ``n_triangles``).
 
     Returns
     -------
@@ -1101,7 +1106,16 @@ def result_summary(result: dict | None) -> dict:
     """
     if not isinstance(result, dict):
         return {}
-    out = {k: result[k] for k in _FIELDS[:8] if k in result and not isinstance(result[k], (dict, list))}
+    out = {k: result[k] for k in _SCALARS if k in result and not isinstance(result[k], (dict, list))}
+    axes = result.get("axes")
+    if isinstance(axes, list):                   # a pad plan: grasp axes, best first
+        out["n_axes"] = len(axes)
+        if axes and isinstance(axes[0], dict):
+            top = axes[0]
+            out.update(top_angle=top.get("angle"), top_sigma_star=top.get("sigma_star"),
+                       top_quality=top.get("quality"))
+            if isinstance(top.get("point"), list):
+                out["top_point"] = " ".join(f"{v:.6g}" for v in top["point"])
     pairs = result.get("pairs")
     if isinstance(pairs, list):
         out["n_pairs"] = len(pairs)
@@ -1119,13 +1133,20 @@ def _describe(row: dict) -> str:
         return f"error: {row['error']}"
     s = result_summary(row["result"])
     g = lambda v, u="": "-" if v is None else (f"{v:.4g}{u}" if isinstance(v, float) else f"{v}{u}")  # noqa: E731
+    if "n_axes" in s:
+        if "top_angle" not in s:
+            return f"{s['n_axes']} axes"
+        return (f"best axis {math.degrees(s['top_angle']):.1f} deg through ({s.get('top_point')}) m "
+                f"sigma*={g(s['top_sigma_star'], ' m')} Q={g(s['top_quality'], ' J')} "
+                f"({s['n_axes']} axes)")
     if "top_quality" in s or "n_pairs" in s:
         if "top_a" not in s:
             return f"{s['n_pairs']} pairs"
         return (f"best {s['top_a']}-{s['top_b']} sigma*={g(s['top_sigma_star'], ' m')} "
                 f"Q={g(s['top_quality'], ' J')} ({s['n_pairs']} pairs)")
     if "sigma_star" in s or "quality" in s:
-        return f"sigma*={g(s.get('sigma_star'), ' m')} Q={g(s.get('quality'), ' J')}"
+        v = f" {s['verdict']}" if "verdict" in s else ""
+        return f"sigma*={g(s.get('sigma_star'), ' m')} Q={g(s.get('quality'), ' J')}{v}"
     if "deform_closure" in s:
         return f"deform closure: {'yes' if s['deform_closure'] else 'no'}, order {s.get('order')}"
     if "n_nodes" in s:

@@ -72,11 +72,16 @@ def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarr
 def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
     """Draw both pads of ``result`` at separation ``sigma`` (default: first touch)."""
     s = 1.0 / length_scale(units)
-    touch = result.start_curve.touch
+    curve = result.start_curve
+    touch = curve.touch
     sigma = result.sigma0 if sigma is None else sigma
-    za = touch.z_a + 0.5 * (result.sigma0 - sigma)
+    # Pad A moves along +a and pad B along −a as the squeeze δ grows (both modes).
+    delta = float(curve.delta(sigma))
+    za, zb = touch.z_a + 0.5 * delta, touch.z_b - 0.5 * delta
     depth = 0.15 * max(result.sigma0, result.pad.half_span)
-    for z, side in ((za, 1), (za + sigma, -1)):
+    if touch.expanding:                     # back to back inside the hole
+        depth = min(depth, 0.45 * max(za - zb, 1e-12))
+    for z, side in ((za, 1), (zb, -1)):
         P = _capsule(result.pad, result.axis, z, side, s, depth)
         ax.fill(P[:, 0], P[:, 1], color=kw.get("color", "0.35"), alpha=kw.get("alpha", 0.8), lw=0)
     return ax
