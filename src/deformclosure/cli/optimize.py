@@ -226,7 +226,6 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plo
                                   jaw_width=jaw_width * scale, model=model)
         bar.update(1)
     report = res.to_dict()
-    report["model"] = "paper"
     s = 1.0 / length_scale(unit)
     ss = res.sigma_star
     click.echo(f"jaws: nodes {n0}, {n1}  sigma0 = {res.limit.sigma0 * s:.6g} {unit}  "

@@ -180,9 +180,7 @@ def _paper(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, units
         q, meth = res.quality[i], "exact" if res.exact[i] else "approx"
         sss = "-" if ss is None else f"{ss * s:.5g}"
         click.echo(f"{i + 1:>4} {a:>6} {b:>6} {sss:>14} {q:>12.5g} {meth:>8}")
-    report = res.to_dict()
-    report["model"] = "paper"
-    write_json(report, output)
+    write_json(res.to_dict(), output)
     if plot:
         from ..plotting.grasp import save_plan_plots
 

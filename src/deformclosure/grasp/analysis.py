@@ -174,6 +174,7 @@ class GraspAnalysis:
         n0, n1 = self.jaws
         v = self.model.graph.vertex_index(n0, n1)
         report = {
+            "model": "paper",
             "sigma_star": sep["sigma_star"],
             "quality": sep["quality"],
             "U_A": sep["U_A"],

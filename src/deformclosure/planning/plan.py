@@ -132,6 +132,7 @@ class PlanResult:
                                              "U_L", "sigma_L", "sigma0", "k01", "e_max",
                                              "method", "attained")}})
         return {
+            "model": "paper",
             "pairs": rows,
             "top": top,
             "epsilon": float(self.epsilon),

@@ -142,12 +142,16 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
         if row["quality"] <= 0:
             break
         c = np.asarray(row["contacts"]) * s
-        ax.plot(c[:, 0], c[:, 1], "-o", color=f"C{k % 10}", lw=2, ms=5,
-                label=f"#{k + 1}: Q* = {row['quality'] * 1e3:.3g} mJ")
+        col = f"C{k % 10}"
+        ax.plot(c[:, 0], c[:, 1], "--o", color=col, lw=1, ms=4,
+                label=f"#{k + 1}: {np.degrees(row['angle']) % 180:.0f}°, Q* = {row['quality'] * 1e3:.3g} mJ")
+        res = next((r for r in plan.top if np.allclose(r.contacts * s, c)), None)
+        if res is not None and res.sigma_star is not None:   # the gripper pose at σ*
+            draw_pads(ax, res, res.sigma_star, units, color=col, alpha=0.55)
     ax.set_aspect("equal")
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    ax.set_title("best grasp axes (pads)")
+    ax.set_title("best grasp axes (pads at σ* for the exactly solved ones)")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     return ax
