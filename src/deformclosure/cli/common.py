@@ -14,7 +14,8 @@ from ..mesh import Mesh, mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
 from ..part import Part
 
-__all__ = ["load_part_or_mesh", "write_json", "json_safe", "parse_xy"]
+__all__ = ["load_part_or_mesh", "write_json", "json_safe", "parse_xy", "pad_from_options",
+           "pad_options", "check_grid", "lazy_progress"]
 
 
 def load_part_or_mesh(path: str | Path, points: np.ndarray | None = None
@@ -71,3 +72,67 @@ def parse_xy(text: str, field: str) -> tuple[float, float]:
     if not (math.isfinite(x) and math.isfinite(y)):
         raise DeformClosureError(f"{field}: coordinates must be finite, got {text!r}")
     return x, y
+
+
+def pad_from_options(radius: float | None, width: float, scale: float, diameter: float):
+    """The pad of ``--pad-radius``/``--pad-width`` (in units of ``scale`` m); the default
+    radius is 5 % of the part's ``diameter`` (m)."""
+    from ..pads import Pad
+
+    if radius is not None and not (math.isfinite(radius) and radius > 0):
+        raise DeformClosureError(f"--pad-radius = {radius!r}: must be a finite length > 0")
+    if not (math.isfinite(width) and width >= 0):
+        raise DeformClosureError(f"--pad-width = {width!r}: must be a finite length >= 0")
+    return Pad(width * scale, 0.05 * diameter if radius is None else radius * scale)
+
+
+def check_grid(angles: int, offsets: int) -> None:
+    """Refuse release-landscape grids outside 4..2000 angles/offsets."""
+    for name, v in (("--grid-angles", angles), ("--grid-offsets", offsets)):
+        if not (4 <= v <= 2000):
+            raise DeformClosureError(f"{name} = {v}: give a whole number from 4 to 2000")
+
+
+def lazy_progress(quiet: bool, desc: str, unit: str):
+    """A ``progress(done, total)`` callback whose tqdm bar appears at the first call (so
+    input errors print no bar), and a ``close()`` for it."""
+    from tqdm import tqdm
+
+    state = {"bar": None}
+
+    def progress(done: int, total: int) -> None:
+        if quiet:
+            return
+        if state["bar"] is None:
+            state["bar"] = tqdm(total=total, desc=desc, unit=unit, leave=False)
+        state["bar"].update(done - state["bar"].n)
+
+    def close() -> None:
+        if state["bar"] is not None:
+            state["bar"].close()
+
+    return progress, close
+
+
+def pad_options(angles: int, offsets: int):
+    """Click options of the pad model shared by ``optimize`` and ``plan``: the pad's size
+    and the release landscape's grid (defaults ``angles``, ``offsets``)."""
+    import click
+
+    opts = [
+        click.option("--pad-radius", type=float, default=None,
+                     help="pads: radius of the pad ends (default 5 % of the part's diameter)."),
+        click.option("--pad-width", type=float, default=0.0, show_default=True,
+                     help="pads: width of the flat face (0 = round fingertip)."),
+        click.option("--grid-angles", type=int, default=angles, show_default=True,
+                     help="pads: axis angles in the release landscape (Δθ = 180°/N)."),
+        click.option("--grid-offsets", type=int, default=offsets, show_default=True,
+                     help="pads: axis offsets per part diameter in the release landscape."),
+    ]
+
+    def decorate(fn):
+        for opt in reversed(opts):
+            fn = opt(fn)
+        return fn
+
+    return decorate

@@ -12,7 +12,7 @@ from ..mesh import mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
 from ..part import Part
 from ..units import length_scale
-from .common import json_safe, parse_xy, write_json
+from .common import json_safe, pad_options, parse_xy, write_json
 
 __all__ = ["command", "load_grasp_inputs"]
 
@@ -71,16 +71,9 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
                    "(inserted as mesh nodes for part files).")
 @click.option("--axis", type=str, default=None, metavar="X,Y,DEG",
               help="pads: the closing axis through (X, Y) at DEG degrees.")
-@click.option("--pad-radius", type=float, default=None,
-              help="pads: radius of the pad ends (default 5 % of the part's diameter).")
-@click.option("--pad-width", type=float, default=0.0, show_default=True,
-              help="pads: width of the flat face (0 = round fingertip).")
+@pad_options(angles=48, offsets=50)
 @click.option("--refine", type=int, default=1, show_default=True,
               help="pads: solve on N meshes (h halving); report error estimates and a verdict.")
-@click.option("--grid-angles", type=int, default=48, show_default=True,
-              help="pads: axis angles in the release landscape (Δθ = 180°/N).")
-@click.option("--grid-offsets", type=int, default=50, show_default=True,
-              help="pads: axis offsets per part diameter in the release landscape.")
 @click.option("--method", type=click.Choice(["exact", "approx", "paper"]), default="exact",
               show_default=True, help="paper model: exact: ours; paper: every crossing; approx: ε-grid.")
 @click.option("--eps", type=float, default=None,
@@ -137,25 +130,15 @@ def parse_axis(at, axis, scale: float):
 
 def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
           output, plot, quiet, expanding=False) -> int:
-    from ..pads import Pad, pad_grasp
-    from .common import load_part_or_mesh
+    from ..pads import pad_grasp
+    from .common import check_grid, load_part_or_mesh, pad_from_options
 
-    for name, v, lo in (("--grid-angles", grid_angles, 4), ("--grid-offsets", grid_offsets, 4)):
-        if not (lo <= v <= 2000):
-            raise GraspError(f"{name} = {v}: give a whole number from {lo} to 2000")
+    check_grid(grid_angles, grid_offsets)
     prt, mesh = load_part_or_mesh(part)
     unit = units or ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
     ax = parse_axis(at, axis, scale)
-    if pad_radius is None:
-        rho = 0.05 * mesh.diameter
-    else:
-        if not (np.isfinite(pad_radius) and pad_radius > 0):
-            raise GraspError(f"--pad-radius = {pad_radius!r}: must be a finite length > 0")
-        rho = pad_radius * scale
-    if not (np.isfinite(pad_width) and pad_width >= 0):
-        raise GraspError(f"--pad-width = {pad_width!r}: must be a finite length >= 0")
-    pad = Pad(pad_width * scale, rho)
+    pad = pad_from_options(pad_radius, pad_width, scale, mesh.diameter)
 
     def progress(k: int, n: int) -> None:
         if not quiet and n > 1:

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import click
 import numpy as np
-from tqdm import tqdm
 
 from ..errors import GraspError
 from ..units import length_scale
-from .common import parse_xy, write_json
+from .common import lazy_progress, pad_options, parse_xy, write_json
 from .optimize import load_grasp_inputs
 
 __all__ = ["command"]
@@ -32,14 +31,7 @@ separation range).
 @click.argument("part", type=click.Path(dir_okay=False))
 @click.option("--model", type=click.Choice(["pads", "paper"]), default="pads", show_default=True,
               help="pads: grasp axes for rigid pads (SPEC §6); paper: node pairs (SPEC §4).")
-@click.option("--pad-radius", type=float, default=None,
-              help="pads: radius of the pad ends (default 5 % of the part's diameter).")
-@click.option("--pad-width", type=float, default=0.0, show_default=True,
-              help="pads: width of the flat face (0 = round fingertip).")
-@click.option("--grid-angles", type=int, default=36, show_default=True,
-              help="pads: axis angles (Δθ = 180°/N).")
-@click.option("--grid-offsets", type=int, default=40, show_default=True,
-              help="pads: axis offsets per part diameter.")
+@pad_options(angles=36, offsets=40)
 @click.option("--top", type=int, default=10, show_default=True,
               help="Refine the best N pairs (paper) or axes (pads) with the exact method.")
 @click.option("--eps", type=float, default=None, help="ε of the shared σ lattice, in joules.")
@@ -71,42 +63,25 @@ def command(part, model, pad_radius, pad_width, grid_angles, grid_offsets, top, 
 
 def _pads(part, pad_radius, pad_width, grid_angles, grid_offsets, top, units, output, plot,
           quiet) -> int:
-    from ..pads import Pad, PadContact
+    from ..pads import PadContact
     from ..pads.noise import twin_mesh
     from ..pads.plan import plan_pads
-    from .common import load_part_or_mesh
+    from .common import check_grid, load_part_or_mesh, pad_from_options
 
     if top < 0:
         raise GraspError(f"--top = {top}: must be >= 0")
-    for name, v in (("--grid-angles", grid_angles), ("--grid-offsets", grid_offsets)):
-        if not (4 <= v <= 2000):
-            raise GraspError(f"{name} = {v}: give a whole number from 4 to 2000")
+    check_grid(grid_angles, grid_offsets)
     prt, mesh = load_part_or_mesh(part)
     unit = units or ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
-    if pad_radius is not None and not (np.isfinite(pad_radius) and pad_radius > 0):
-        raise GraspError(f"--pad-radius = {pad_radius!r}: must be a finite length > 0")
-    if not (np.isfinite(pad_width) and pad_width >= 0):
-        raise GraspError(f"--pad-width = {pad_width!r}: must be a finite length >= 0")
-    rho = 0.05 * mesh.diameter if pad_radius is None else pad_radius * scale
-    pad = Pad(pad_width * scale, rho)
-    bar = None
-
-    def progress(done: int, total: int) -> None:
-        nonlocal bar
-        if quiet:
-            return
-        if bar is None:
-            bar = tqdm(total=total, desc="grasp axes", unit="axis", leave=False)
-        bar.update(done - bar.n)
-
+    pad = pad_from_options(pad_radius, pad_width, scale, mesh.diameter)
+    progress, close = lazy_progress(quiet, "grasp axes", "axis")
     twin = PadContact(twin_mesh(prt)) if prt is not None else None
     try:
         res = plan_pads(mesh, pad, n_angles=grid_angles, n_offsets=grid_offsets, top=top,
                         twin=twin, progress=progress)
     finally:
-        if bar is not None:
-            bar.close()
+        close()
     s = 1.0 / length_scale(unit)
     click.echo(f"{len(res.rows)} grasp axes (pads W = {pad.width * s:.4g}, rho = {pad.radius * s:.4g} {unit})")
     click.echo(f"{'rank':>4} {'angle':>7} {'contact A (' + unit + ')':>20} {'contact B':>18} "
@@ -154,23 +129,13 @@ def _paper(part, top, eps, expanding, jaw_width, min_sep, max_sep, region, units
         except ValueError:
             raise GraspError(f"--region {r!r}: expected X0,Y0,X1,Y1 (four numbers)") from None
         boxes.append((x0, y0, x1, y1))
-    bar = None  # created at the first lattice value, so input errors print no bar
-
-    def progress(done: int, total: int) -> None:
-        nonlocal bar
-        if quiet:
-            return
-        if bar is None:
-            bar = tqdm(total=total, desc="σ lattice", unit="σ", leave=False)
-        bar.update(done - bar.n)
-
+    progress, close = lazy_progress(quiet, "σ lattice", "σ")
     try:
         res = plan_grasps(mesh, eps=eps, mode="expanding" if expanding else "contracting",
                           jaw_width=jaw_width * scale, separation_range=rng, regions=boxes or None,
                           top=top, progress=progress)
     finally:
-        if bar is not None:
-            bar.close()
+        close()
     s = 1.0 / length_scale(unit)
     click.echo(f"{len(res.pairs)} jaw pairs, ε = {res.epsilon:.3g} J on {res.n_sigma} σ values")
     click.echo(f"{'rank':>4} {'a':>6} {'b':>6} {'sigma* (' + unit + ')':>14} {'Q (J)':>12} {'method':>8}")

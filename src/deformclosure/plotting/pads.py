@@ -16,6 +16,16 @@ def _nan(v) -> np.ndarray:
     return np.array([np.nan if x is None else x for x in v], float)
 
 
+def _outline(ax, mesh, s: float) -> None:
+    """The part's boundary loops, lightly filled, in plot units (``s`` per metre)."""
+    for lp in mesh.loops:
+        P = mesh.nodes[np.append(lp, lp[0])] * s
+        ax.plot(P[:, 0], P[:, 1], color="k", lw=1)
+    ax.fill(*(mesh.nodes[mesh.outer_loop] * s).T, color="C0", alpha=0.15, lw=0)
+    for lp in mesh.hole_loops:
+        ax.fill(*(mesh.nodes[lp] * s).T, color="white", lw=0)
+
+
 def plot_pad_quality(result, ax=None, units: str = "mm"):
     """``U``, ``U_A``, ``U_L`` and ``Q`` (mJ) against the pad separation σ.
 
@@ -104,10 +114,7 @@ def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
     if ax is None:
         _, ax = new_figure((6, 6))
     s = 1.0 / length_scale(units)
-    for lp in mesh.loops:
-        P = mesh.nodes[np.append(lp, lp[0])] * s
-        ax.plot(P[:, 0], P[:, 1], color="k", lw=1)
-    ax.fill(*(mesh.nodes[mesh.outer_loop] * s).T, color="C0", alpha=0.15, lw=0)
+    _outline(ax, mesh, s)
     a = result.axis.direction
     c = result.contacts * s
     mid = c.mean(axis=0)
@@ -134,10 +141,7 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
     if ax is None:
         _, ax = new_figure((6, 6))
     s = 1.0 / length_scale(units)
-    for lp in mesh.loops:
-        P = mesh.nodes[np.append(lp, lp[0])] * s
-        ax.plot(P[:, 0], P[:, 1], color="k", lw=1)
-    ax.fill(*(mesh.nodes[mesh.outer_loop] * s).T, color="C0", alpha=0.12, lw=0)
+    _outline(ax, mesh, s)
     for k, row in enumerate(plan.rows[:n]):
         if row["quality"] <= 0:
             break
