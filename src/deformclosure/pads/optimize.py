@@ -79,6 +79,7 @@ class PadGraspResult:
     grid: AxisGrid
     start_curve: GraspCurve = field(repr=False)
     n_nodes: int = 0
+    e_L: float | None = None
 
     @property
     def verdict(self) -> str:
@@ -104,7 +105,8 @@ class PadGraspResult:
             "noise_floor": self.noise,
             "noise_floor_relative": self.noise_relative,
             "critical_distance": self.limit.critical_distance,
-            "e_L": None,
+            "e_L": self.e_L,
+            "mode": "expanding" if self.start_curve.expanding else "contracting",
             "escape_path": [ax.to_dict() for ax in self.escape_path],
             "grid": {"d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
                      "n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets},
@@ -263,7 +265,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         U_L=e_star.UL if sigma_star is not None else 0.0,
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
-        start_curve=start_curve, n_nodes=mesh.n_nodes)
+        start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=mesh.material.elastic_limit_strain)
 
 
 def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
