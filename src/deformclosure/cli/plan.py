@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import GraspError
 from ..units import length_scale
-from .common import lazy_progress, pad_options, parse_xy, write_json
+from .common import lazy_progress, pad_options, write_json
 from .optimize import load_grasp_inputs
 
 __all__ = ["command"]

@@ -189,6 +189,10 @@ class Landscape:
             return 0.0
         return self.noise_factor * float(np.quantile(np.abs(U1[ok] - U2[ok]) / top[ok], 0.9))
 
+    def seed(self, v: int, curve: GraspCurve) -> None:
+        """Use an already traced ``curve`` for vertex ``v`` (e.g. the start axis)."""
+        self._curves[v] = curve
+
     def curve(self, v: int) -> GraspCurve:
         """The exact energy curve of vertex ``v`` (computed once)."""
         c = self._curves.get(v)

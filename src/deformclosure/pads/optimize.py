@@ -24,7 +24,7 @@ from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid, Landscape, Release
 from .noise import jitter_noise
-from .limit import PadLimit, critical_distance_of, pad_elastic_limit
+from .limit import PadLimit, pad_elastic_limit
 
 __all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
 
@@ -229,7 +229,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     grid = AxisGrid.around(start_axis, reach, mesh.diameter, n_angles, n_offsets)
     land = Landscape(solver, pad, grid, sigma_L, hole)
     s = grid.vertex(0, 0)
-    land._curves[s] = start_curve
+    land.seed(s, start_curve)
     Us = start_curve.energy_at
 
     if not noise:

@@ -11,7 +11,6 @@ is maximised on the lattice. The best ``top`` axes are then solved exactly with
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
