@@ -175,6 +175,8 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
         e = report["error_estimate"]
         es = "-" if e["sigma_star"] is None else f"{e['sigma_star'] * s:.3g} {unit}"
         click.echo(f"error estimate (Richardson): Q* ± {e['quality']:.3g} J, sigma* ± {es}")
+    for w in fine.warnings:
+        click.echo(f"warning: {w}", err=True)
     click.echo(f"verdict: {report['verdict'].upper()}")
     write_json(report, output)
     if plot:

@@ -80,6 +80,7 @@ class PadGraspResult:
     start_curve: GraspCurve = field(repr=False)
     n_nodes: int = 0
     e_L: float | None = None
+    warnings: tuple[str, ...] = ()
 
     @property
     def verdict(self) -> str:
@@ -107,6 +108,7 @@ class PadGraspResult:
             "critical_distance": self.limit.critical_distance,
             "e_L": self.e_L,
             "mode": "expanding" if self.start_curve.expanding else "contracting",
+            "warnings": list(self.warnings),
             "escape_path": [ax.to_dict() for ax in self.escape_path],
             "grid": {"d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
                      "n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets},
@@ -265,7 +267,20 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         U_L=e_star.UL if sigma_star is not None else 0.0,
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
-        start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=mesh.material.elastic_limit_strain)
+        start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=mesh.material.elastic_limit_strain,
+        warnings=_resolution_warnings(mesh, pad, hole))
+
+
+def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:
+    """A warning when boundary nodes are farther apart than the pad's contact reach: the
+    pads then meet one node or none, and energies follow the nodes (a large noise floor)."""
+    loop = mesh.outer_loop if hole is None else mesh.hole_loops[hole]
+    P = mesh.nodes[loop]
+    h = float(np.median(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)))
+    if h > pad.reach:
+        return (f"boundary nodes are {h:.3g} m apart, more than the pads' contact reach "
+                f"{pad.reach:.3g} m: refine the mesh (mesh.max_area) or use larger pads",)
+    return ()
 
 
 def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
