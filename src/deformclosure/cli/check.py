@@ -62,6 +62,9 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None) -
 
     PART is a part file (JSON) or a mesh file.
     """
+    from ..outputs import check_outputs
+
+    check_outputs([output, plot], [], [part, finger_file])
     from ..dspace.closure import deform_closure
     from ..dspace.fingers import load_fingers
     from ..mesh.io import is_mesh_file

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..outputs import write_text_atomic
 from ..mesh import Mesh, mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
 from ..part import Part
@@ -57,10 +58,7 @@ def write_json(report: dict, path: str | Path | None) -> None:
     if str(path) == "-":
         print(text)
         return
-    try:
-        Path(path).write_text(text + "\n")
-    except OSError as err:
-        raise DeformClosureError(f"{path}: cannot write report ({err.strerror})") from None
+    write_text_atomic(path, text + "\n", "report")
 
 
 def parse_xy(text: str, field: str) -> tuple[float, float]:

@@ -28,6 +28,9 @@ def command(part: str, output: str | None, max_area: float | None, min_angle: fl
 
     Given a mesh file instead (mesh JSON or any meshio format), check it and convert it.
     """
+    from ..outputs import check_outputs
+
+    check_outputs([output, plot], [], [part])
     from pathlib import Path
 
     from ..units import length_scale

@@ -12,6 +12,7 @@ from ..mesh import mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
 from ..part import Part
 from ..units import length_scale
+from ..outputs import check_outputs, write_text_atomic
 from .common import json_safe, pad_options, parse_xy, write_json
 
 __all__ = ["command", "load_grasp_inputs"]
@@ -93,6 +94,7 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
 def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets,
             method, eps, expanding, jaw_width, units, output, plot, export_graph, quiet) -> int:
     """Optimal separation σ* maximising Q = min(U_A, U_L) for one grasp."""
+    check_outputs([output, export_graph], [plot], [part])
     if model is None:
         model = "paper" if jaws is not None else "pads"
     if model == "paper":
@@ -228,11 +230,7 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plo
     write_json(report, output)
     if export_graph:
         g = model.graph.to_dict(model.stiffness.sigma0, model.stiffness.k, pulls=model.pulls)
-        try:
-            with open(export_graph, "w") as fh:
-                json.dump(json_safe(g), fh, allow_nan=False)
-        except OSError as err:
-            raise DeformClosureError(f"{export_graph}: cannot write graph ({err.strerror})") from None
+        write_text_atomic(export_graph, json.dumps(json_safe(g), allow_nan=False), "graph")
     if plot:
         from ..plotting.grasp import save_grasp_plots
 

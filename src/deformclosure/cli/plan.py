@@ -49,6 +49,9 @@ separation range).
 def command(part, model, pad_radius, pad_width, grid_angles, grid_offsets, top, eps, expanding,
             jaw_width, min_sep, max_sep, region, units, output, plot, quiet) -> int:
     """Rank grasps of a part: grasp axes for pads (default) or jaw node pairs (paper)."""
+    from ..outputs import check_outputs
+
+    check_outputs([output], [plot], [part])
     if model == "pads":
         bad = [n for n, g in (("--eps", eps is not None), ("--expanding", expanding),
                               ("--jaw-width", jaw_width != 0.0), ("--min-sep", min_sep is not None),

@@ -30,14 +30,16 @@ export holds every row with its full report.
 def command(db, fmt, status, output) -> int:
     """List a batch's results, or export them as CSV or JSON."""
     from ..errors import BatchError
+    from ..outputs import atomic_path, check_outputs
     from ..planning.batch import format_results, read_results
 
+    check_outputs([output], [], [db])
     text = format_results(read_results(db, status=status), fmt)
     if output is None or output == "-":
         click.echo(text.rstrip("\n"))
         return 0
     try:
-        with open(output, "w", encoding="utf-8", newline="") as fh:
+        with atomic_path(output) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(text if text.endswith("\n") else text + "\n")
     except OSError as err:
         raise BatchError(f"{output}: cannot write ({err.strerror})") from None

@@ -42,6 +42,9 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
 
     PART is a part file (JSON) or a mesh file.
     """
+    from ..outputs import check_outputs
+
+    check_outputs([output, plot], [], [part, finger_file])
     from ..dspace.fingers import load_fingers
     from ..dspace.slices import dfree_slice
     from ..units import length_scale

@@ -102,12 +102,21 @@ class SliceResult:
 
     def save(self, path: str | Path) -> None:
         """Write ``.npz`` (arrays) or ``.json`` (:meth:`to_dict`), chosen by the suffix."""
+        from ..outputs import atomic_path
+
         path = Path(path)
         if path.suffix.lower() == ".json":
-            path.write_text(json.dumps(self.to_dict()) + "\n")
+            with atomic_path(path) as tmp:
+                tmp.write_text(json.dumps(self.to_dict()) + "\n")
             return
+        if path.suffix.lower() != ".npz":
+            path = path.with_name(path.name + ".npz")      # what numpy would write
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            self._save_npz(fh)
+
+    def _save_npz(self, fh) -> None:
         np.savez_compressed(
-            path, node=self.node, xs=self.xs, ys=self.ys, free=self.free, in_dt=self.in_dt,
+            fh, node=self.node, xs=self.xs, ys=self.ys, free=self.free, in_dt=self.in_dt,
             obstacles=self.obstacles, energy=self.energy, energy_kind=self.energy_kind, q=self.q,
             base_position=self.q[self.node], units=json.dumps(UNITS),
         )

@@ -205,15 +205,18 @@ def read_mesh(path: str | Path, units: str = "m", material: Material | None = No
 
 def write_mesh(mesh: Mesh, path: str | Path) -> None:
     """Write ``mesh`` as mesh JSON (``.json``) or with meshio (any other suffix)."""
+    from ..outputs import atomic_path, write_text_atomic
+
     path = Path(path)
     if path.suffix.lower() == ".json":
-        path.write_text(json.dumps(mesh_to_dict(mesh)))
+        write_text_atomic(path, json.dumps(mesh_to_dict(mesh)), "mesh")
     else:
         import meshio
 
         try:
-            meshio.write_points_cells(path, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
-                                      [("triangle", mesh.triangles)])
+            with atomic_path(path) as tmp:
+                meshio.write_points_cells(tmp, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
+                                          [("triangle", mesh.triangles)])
         except (Exception, SystemExit) as err:  # unknown suffix, unwritable path, ...
             detail = " ".join(str(err).split())[:300]
             raise MeshError(f"{path}: cannot write mesh file ({detail}); use .json or a "

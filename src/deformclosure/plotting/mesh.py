@@ -27,8 +27,11 @@ def save_figure(fig, path: str | Path) -> None:
 
     from ..errors import DeformClosureError
 
+    from ..outputs import atomic_path
+
     try:
-        fig.savefig(path, dpi=150, bbox_inches="tight")
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=Path(path).suffix[1:] or "png")
     except (OSError, ValueError) as err:
         raise DeformClosureError(f"{path}: cannot write plot ({err})") from None
     finally:
