@@ -116,7 +116,7 @@ def test_key_follows_inputs_parsed_options_and_version(parts, tmp_path):
     (lambda d: d / "empty", r"no part or mesh files"),
     (lambda d: d / "jobs.txt", r"must be \.json or \.csv"),
     (lambda d: _write_list(d / "j.json", {"part": "x"}), r"is a list"),
-    (lambda d: (d / "j.json").write_text("[{") and d / "j.json", r"invalid JSON at line 1"),
+    (lambda d: (d / "j.json").write_text("[{") and d / "j.json", r"not valid JSON \(line 1"),
     (lambda d: _write_list(d / "j.json", [{"part": "parts/rectangle.json", "command": "fly"}]),
      r"job \[0\]: command 'fly': not a job command; choose one of .*optimize"),
     (lambda d: _write_list(d / "j.json", [{"part": "parts/rectangle.json", "command": "batch"}]),

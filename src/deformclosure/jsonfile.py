@@ -1,18 +1,113 @@
-"""Reading the package's JSON input files with one-line errors."""
+"""Reading the package's input files (JSON and text) safely, with one-line errors.
+
+Every input file goes through :func:`read_text_file` (a regular file of bounded size, in
+UTF-8 — or UTF-16 with a byte-order mark) and JSON through :func:`parse_json`, which
+refuses what the standard parser lets through or dies on: duplicate keys (``"units"``
+twice would silently keep the last), ``NaN``/``Infinity``, integers too long to be a
+length or a count, and nesting deeper than any input of ours needs.
+"""
 
 from __future__ import annotations
 
 import json
+import re
+import stat
 from pathlib import Path
 from typing import Any
 
 from .errors import DeformClosureError
 
-__all__ = ["read_json"]
+__all__ = ["read_json", "read_text_file", "parse_json", "check_input_file", "MAX_INPUT_BYTES"]
+
+#: Largest input file read (bytes): far above any part, mesh or job list we write.
+MAX_INPUT_BYTES = 256 * 2**20
+#: Deepest JSON nesting accepted (a mesh JSON needs 4).
+MAX_DEPTH = 64
+#: Longest integer literal accepted (digits); longer ones cannot be meant.
+MAX_INT_DIGITS = 30
+
+
+def check_input_file(path: str | Path, error: type[DeformClosureError], what: str) -> None:
+    """Refuse what is not a regular file of bounded size (a FIFO or ``/dev/zero`` would
+    hang or exhaust memory)."""
+    path = Path(path)
+    try:
+        st = path.stat()
+    except OSError as err:
+        raise error(f"{path}: cannot read the {what} ({err.strerror})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise error(f"{path}: not a regular file; give the {what} as a file")
+    if st.st_size > MAX_INPUT_BYTES:
+        raise error(f"{path}: {st.st_size / 2**20:.0f} MiB is too large for a {what} "
+                    f"(limit {MAX_INPUT_BYTES // 2**20} MiB)")
+
+
+def read_text_file(path: str | Path, error: type[DeformClosureError], what: str) -> str:
+    """The text of a regular input file: UTF-8 (BOM allowed) or UTF-16 with a BOM."""
+    path = Path(path)
+    check_input_file(path, error, what)
+    try:
+        raw = path.read_bytes()
+    except OSError as err:
+        raise error(f"{path}: cannot read the {what} ({err.strerror})") from None
+    try:
+        if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+            return raw.decode("utf-16")
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise error(f"{path}: the {what} is not UTF-8 text (byte {err.start}); save it as UTF-8") from None
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict:
+    out: dict = {}
+    for k, v in pairs:
+        if k in out:
+            raise ValueError(f"key {k!r} appears twice in one object; keep one")
+        out[k] = v
+    return out
+
+
+def _int(text: str) -> int:
+    if len(text.lstrip("-")) > MAX_INT_DIGITS:
+        raise ValueError(f"integer with {len(text)} digits; no value here needs more than "
+                         f"{MAX_INT_DIGITS}")
+    return int(text)
+
+
+def _constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number JSON allows; give a finite number")
+
+
+def _depth_ok(text: str) -> bool:
+    """Whether brackets nest at most MAX_DEPTH deep (strings skipped), in linear time."""
+    depth = 0
+    for m in re.finditer(r'"(?:\\.|[^"\\])*"|[\[\]{}]', text):
+        t = m.group()
+        if t in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                return False
+        elif t in "]}":
+            depth -= 1
+    return True
+
+
+def parse_json(text: str, source: str, error: type[DeformClosureError], what: str) -> Any:
+    """Parse JSON ``text`` from ``source`` strictly (module docstring); one-line errors."""
+    if not _depth_ok(text):
+        raise error(f"{source}: JSON nested more than {MAX_DEPTH} deep; not a {what}")
+    try:
+        return json.loads(text, object_pairs_hook=_no_duplicates, parse_int=_int,
+                          parse_constant=_constant)
+    except json.JSONDecodeError as err:
+        raise error(f"{source}: not valid JSON (line {err.lineno} column {err.colno}: {err.msg}); "
+                    f"fix the {what}'s syntax") from None
+    except (ValueError, RecursionError) as err:
+        raise error(f"{source}: {err}") from None
 
 
 def read_json(path: str | Path, error: type[DeformClosureError], what: str) -> Any:
-    """Parse the JSON file ``path``.
+    """Parse the JSON file ``path`` (see :func:`read_text_file` and :func:`parse_json`).
 
     Parameters
     ----------
@@ -23,14 +118,4 @@ def read_json(path: str | Path, error: type[DeformClosureError], what: str) -> A
     what : str
         What the file is, for the message (``"part file"``, ``"finger file"``).
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as err:
-        reason = getattr(err, "strerror", None) or err
-        raise error(f"{path}: cannot read the {what} ({reason})") from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as err:
-        raise error(f"{path}: not valid JSON (line {err.lineno} column {err.colno}: {err.msg}); "
-                    f"fix the {what}'s syntax") from None
+    return parse_json(read_text_file(path, error, what), str(path), error, what)

@@ -81,7 +81,12 @@ def pad_from_options(radius: float | None, width: float, scale: float, diameter:
         raise DeformClosureError(f"--pad-radius = {radius!r}: must be a finite length > 0")
     if not (math.isfinite(width) and width >= 0):
         raise DeformClosureError(f"--pad-width = {width!r}: must be a finite length >= 0")
-    return Pad(width * scale, 0.05 * diameter if radius is None else radius * scale)
+    rho = 0.05 * diameter if radius is None else radius * scale
+    for name, v in (("--pad-radius", rho), ("--pad-width", width * scale)):
+        if v > 100 * diameter:
+            raise DeformClosureError(f"{name} = {v:.3g} m: more than 100 times the part's diameter "
+                                     f"({diameter:.3g} m); check the value and --units")
+    return Pad(width * scale, rho)
 
 
 def check_grid(angles: int, offsets: int) -> None:

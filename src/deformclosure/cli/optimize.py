@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import DeformClosureError, GraspError
 from ..mesh import mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
-from ..part import Part
+from ..part import Part, PartError
 from ..units import length_scale
 from ..outputs import check_outputs, write_text_atomic
 from .common import json_safe, pad_options, parse_xy, write_json
@@ -48,7 +48,7 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
         raise DeformClosureError(f"{path}: file not found; give a part file (.json) or a mesh file")
     mesh_file = is_mesh_file(p)
     part = None if mesh_file else Part.from_file(p)
-    unit = units or ("m" if part is None else part.units)
+    unit = units if units is not None else ("m" if part is None else part.units)
     scale = length_scale(unit, "--units")
     pts = None
     if at:
@@ -56,7 +56,17 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
     if part is None:
         mesh = read_mesh(p)
     else:
-        mesh = mesh_part(part, points=pts)
+        far = 100 * part.diameter + float(np.abs(part.outer).max())
+        if pts is not None and np.abs(pts).max() > far:
+            raise GraspError(f"--at: a jaw position is far outside the part ({', '.join(at)} "
+                             f"{unit}); check the values and --units")
+        try:
+            mesh = mesh_part(part, points=pts)
+        except PartError as err:   # name the option, not the mesher's internal point list
+            if "points[" not in str(err):
+                raise
+            raise GraspError(f"--at: a jaw position lies outside the part "
+                             f"({', '.join(at)} {unit}); move it onto the part's boundary") from None
     return mesh, unit, scale, pts
 
 
@@ -137,7 +147,7 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
 
     check_grid(grid_angles, grid_offsets)
     prt, mesh = load_part_or_mesh(part)
-    unit = units or ("m" if prt is None else prt.units)
+    unit = units if units is not None else ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
     ax = parse_axis(at, axis, scale)
     pad = pad_from_options(pad_radius, pad_width, scale, mesh.diameter)
@@ -201,6 +211,9 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plo
     if not (np.isfinite(jaw_width) and jaw_width >= 0):
         raise GraspError(f"--jaw-width = {jaw_width!r}: must be a finite length >= 0 (0 = point jaws)")
     mesh, unit, scale, pts = load_grasp_inputs(part, at, units)
+    if jaw_width * scale > mesh.diameter:
+        raise GraspError(f"--jaw-width = {jaw_width:g} {unit}: wider than the part "
+                         f"({mesh.diameter / scale:.4g} {unit}); check the value and --units")
     if pts is not None:
         n0, n1 = (mesh.find_node(p, tol=1e-6 * mesh.diameter) for p in pts)
     else:

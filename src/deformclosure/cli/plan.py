@@ -75,7 +75,7 @@ def _pads(part, pad_radius, pad_width, grid_angles, grid_offsets, top, units, ou
         raise GraspError(f"--top = {top}: must be >= 0")
     check_grid(grid_angles, grid_offsets)
     prt, mesh = load_part_or_mesh(part)
-    unit = units or ("m" if prt is None else prt.units)
+    unit = units if units is not None else ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
     pad = pad_from_options(pad_radius, pad_width, scale, mesh.diameter)
     progress, close = lazy_progress(quiet, "grasp axes", "axis")

@@ -51,7 +51,7 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
 
     fingers = load_fingers(finger_file)
     part_obj, mesh = load_part_or_mesh(part)
-    unit = units or (part_obj.units if part_obj is not None else "m")
+    unit = units if units is not None else (part_obj.units if part_obj is not None else "m")
     s = length_scale(unit, "--units")
     if (node is None) == (at is None):
         raise DeformClosureError("give exactly one of --node N or --at X,Y")
@@ -67,6 +67,10 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
             raise DeformClosureError(f"--extent: expected XMIN,XMAX,YMIN,YMAX, got {extent!r}") from None
         if len(ext) != 4:
             raise DeformClosureError(f"--extent: expected 4 numbers XMIN,XMAX,YMIN,YMAX, got {extent!r}")
+        reach = 100 * mesh.diameter + float(np.abs(mesh.nodes).max())
+        if not all(np.isfinite(ext)) or max(abs(v) for v in ext) > reach:
+            raise DeformClosureError(f"--extent {extent}: must be finite and within 100 part "
+                                     "diameters of the part; check the values and --units")
     if resolution < 2 or resolution > 4000:
         raise DeformClosureError(f"--resolution {resolution}: use 2..4000 pixels per axis")
     if mesh.material is None:

@@ -282,11 +282,25 @@ FINGER_TYPES: dict[str, type[Finger]] = {
 # --------------------------------------------------------------------------- file format
 
 try:  # pydantic is a core dependency; keep the import local to this module.
-    from pydantic import BaseModel, ConfigDict, Field, ValidationError
+    from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 except ImportError as err:  # pragma: no cover
     raise ImportError("deformclosure.dspace.fingers needs pydantic>=2") from err
 
-_Pt = tuple[float, float]
+#: Largest coordinate or length magnitude accepted in a finger file (file units).
+_MAX_LENGTH = 1e12
+
+
+def _real(v: Any) -> float:
+    """A JSON number, not a boolean or a string (which pydantic's lax mode would coerce)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise ValueError(f"must be a number, got {v!r:.40}")
+    if not (math.isfinite(v) and abs(v) <= _MAX_LENGTH):
+        raise ValueError(f"must be a finite number of at most {_MAX_LENGTH:g} in magnitude")
+    return float(v)
+
+
+_Num = Annotated[float, BeforeValidator(_real)]
+_Pt = tuple[_Num, _Num]
 
 
 class _Model(BaseModel):
@@ -301,7 +315,7 @@ class _PointModel(_Model):
 class _DiscModel(_Model):
     type: Literal["disc"]
     center: _Pt
-    radius: float
+    radius: _Num
 
 
 class _PolygonModel(_Model):
@@ -391,7 +405,7 @@ def _message(err: ValidationError, source: str, raw: Any) -> str:
     if kind == "literal_error" and field == "units":
         return f"{source}: units: {e.get('input')!r} is not a length unit; {_HINTS['units']}"
     hint = _HINTS.get(field or "", "")
-    msg = e["msg"].rstrip(".")
+    msg = e["msg"].rstrip(".").removeprefix("Value error, ")
     return f"{source}: {where}: {msg}" + (f"; {hint}" if hint else "")
 
 
@@ -483,8 +497,9 @@ def fingers_from_dict(data: Any, source: str = "fingers") -> tuple[Finger, ...]:
             out.append(PolygonFinger(corners=tuple((float(x), float(y)) for x, y in v)))
         else:
             n = np.asarray(m.normal, dtype=float)
+            n = n / max(float(np.abs(n).max()), 1e-300)   # scale first: no overflow in the norm
             norm = float(np.linalg.norm(n))
-            if not norm > 0:
+            if not norm > 0 or not np.any(np.asarray(m.normal) != 0):
                 raise FingerError(f"{where}.normal: must be non-zero; {_HINTS['normal']}")
             n = n / norm
             out.append(

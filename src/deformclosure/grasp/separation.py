@@ -643,6 +643,9 @@ def _approx(P: _Problem, eps: float, lam: float, max_samples: int, grid: str):
     breakpoints.
     """
     xi = eps / lam
+    if not (math.isfinite(xi) and xi > 0):
+        raise GraspError(f"method='approx' with eps={eps:g} J: the step ε/λ = {xi:g} m is not a "
+                         "usable length; use a larger eps or method='exact'")
     if grid == "lattice":
         s_lo, s_hi = sorted((P.sign * P.lo, P.sign * P.hi))  # the range in σ (m)
         j0, j1 = math.ceil(s_lo / xi), math.floor(s_hi / xi)
@@ -656,13 +659,14 @@ def _approx(P: _Problem, eps: float, lam: float, max_samples: int, grid: str):
         return [], [P.eval_x(float(P.sign * s)) for s in sig], xi, 0
     static = _static_breakpoints(P)
     widths = np.diff(static.x)
-    counts = np.maximum(1, np.ceil(widths / xi)).astype(np.int64)
-    total = int(counts.sum()) + 2
-    if total > max_samples:
+    cells = np.maximum(1.0, np.ceil(widths / xi))      # float: no integer overflow
+    total = float(cells.sum()) + 2
+    if not total <= max_samples:
         raise GraspError(
-            f"method='approx' with eps={eps:g} J needs {total} evaluations of U_A "
+            f"method='approx' with eps={eps:g} J needs {total:.3g} evaluations of U_A "
             f"(step {xi:.3g} m), more than max_samples={max_samples}; use a larger eps, "
             f"method='exact', or raise max_samples")
+    counts = cells.astype(np.int64)
     ends = [static.breakpoint(0), static.breakpoint(len(static) - 1)]
     evals = [P.eval_bp(bp) for bp in ends]
     h = widths / counts

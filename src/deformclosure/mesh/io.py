@@ -77,10 +77,18 @@ def mesh_from_dict(data: Any) -> Mesh:
         scale = length_scale(data["units"], "units")
     except Exception as err:
         raise MeshError(str(err)) from None
+    def _numbers(rows, kinds) -> bool:
+        return isinstance(rows, list) and all(
+            isinstance(r, list) and all(isinstance(v, kinds) and not isinstance(v, bool) for v in r)
+            for r in rows)
+
+    if not _numbers(data["nodes"], (int, float)) or not _numbers(data["triangles"], int):
+        raise MeshError("nodes/triangles: must be lists of [x, y] numbers and [i, j, k] integers "
+                        "(no strings or booleans)")
     try:
         nodes = np.asarray(data["nodes"], dtype=float) * scale
         tris_raw = np.asarray(data["triangles"])
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise MeshError("nodes/triangles: must be lists of [x, y] numbers and [i, j, k] integers") from None
     if tris_raw.dtype.kind not in "iu":
         raise MeshError("triangles: node ids must be integers")
@@ -133,10 +141,12 @@ def is_mesh_file(path: str | Path) -> bool:
     path = Path(path)
     if path.suffix.lower() != ".json":
         return True
+    from ..jsonfile import read_json
+
     try:
-        data = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
-        return False
+        data = read_json(path, MeshError, "mesh file")
+    except MeshError:
+        return False     # not a readable mesh JSON: the part reader will say what is wrong
     return isinstance(data, dict) and "format" in data and "outer" not in data
 
 
@@ -157,16 +167,16 @@ def read_mesh(path: str | Path, units: str = "m", material: Material | None = No
     """
     path = Path(path)
     if path.suffix.lower() == ".json":
-        try:
-            data = json.loads(path.read_text())
-        except OSError as err:
-            raise MeshError(f"{path}: cannot read mesh file ({err.strerror})") from None
-        except json.JSONDecodeError as err:
-            raise MeshError(f"{path}: not valid JSON ({err.msg} at line {err.lineno}); fix the syntax") from None
-        mesh = mesh_from_dict(data)
+        from ..jsonfile import read_json
+
+        mesh = mesh_from_dict(read_json(path, MeshError, "mesh file"))
     else:
         import contextlib
         import io
+
+        from ..jsonfile import check_input_file
+
+        check_input_file(path, MeshError, "mesh file")
 
         import meshio
 
@@ -189,6 +199,10 @@ def read_mesh(path: str | Path, units: str = "m", material: Material | None = No
         if pts.shape[1] == 3 and np.any(pts[:, 2] != 0):
             raise MeshError(f"{path}: node z coordinates are not all 0; a planar mesh is required")
         tri = np.concatenate(tris).astype(np.int64)
+        if tri.size and (tri.min() < 0 or tri.max() >= len(pts)):
+            bad = int(tri.min()) if tri.min() < 0 else int(tri.max())
+            raise MeshError(f"{path}: a triangle names node {bad}, but the file has nodes 0.."
+                            f"{len(pts) - 1} (OBJ faces count from 1); fix the faces")
         # meshio files often carry geometry points unused by any triangle: drop them.
         used = np.zeros(len(pts), bool)
         used[tri.ravel()] = True

@@ -75,7 +75,7 @@ class Pad:
         x = np.asarray(x, float)
         xi = np.abs(x) - 0.5 * self.width
         inside = np.abs(x) < (self.reach if capped else self.half_span)
-        xi_c = np.clip(xi, 0.0, None)
+        xi_c = np.clip(xi, 0.0, self.radius)          # outside the pad the value is unused
         root = np.sqrt(np.clip(self.radius**2 - xi_c**2, 0.0, None))
         d = np.where(inside, self.radius - root, np.inf)
         with np.errstate(divide="ignore", invalid="ignore"):

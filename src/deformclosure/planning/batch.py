@@ -356,10 +356,11 @@ def load_jobs(path: str | os.PathLike, command: str = "plan",
     suffix = p.suffix.lower()
     if suffix not in (".json", ".csv"):
         raise BatchError(f"{path}: a job list must be .json or .csv (or give a folder)")
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as err:
-        raise BatchError(f"{path}: cannot read job list ({err})") from None
+    from ..jsonfile import read_text_file
+
+    text = read_text_file(p, BatchError, "job list")
+    if "\x00" in text:
+        raise BatchError(f"{path}: the job list contains NUL bytes; it is not a text job list")
     specs = _json_specs(p, text) if suffix == ".json" else _csv_specs(p, text)
     if not specs:
         raise BatchError(f"{path}: the job list is empty")
@@ -369,10 +370,9 @@ def load_jobs(path: str | os.PathLike, command: str = "plan",
 
 
 def _json_specs(p: Path, text: str) -> list[tuple[str, str, str | None, Any]]:
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise BatchError(f"{p}: invalid JSON at line {err.lineno}, column {err.colno}: {err.msg}") from None
+    from ..jsonfile import parse_json
+
+    data = parse_json(text, str(p), BatchError, "job list")
     if not isinstance(data, list):
         raise BatchError(f"{p}: a JSON job list is a list of "
                          '{"part": ..., "command": ..., "options": [...]} objects')
