@@ -49,7 +49,7 @@ CASES = {
         **{"12,": "1" + "0" * 5000 + ","}))], "digits"),
     "400-digit integer": (lambda t: ["mesh", _write(t, "p.json", _rect_text(
         **{"12,": "1" + "0" * 400 + ","}))], "digits"),
-    "NaN": (lambda t: ["mesh", _write(t, "p.json", _rect_text(**{"12,": "NaN,"}))], "NaN"),
+    "NaN": (lambda t: ["mesh", _write(t, "p.json", _rect_text(**{"12,": "NaN,"}))], "finite"),
     "fifo": (lambda t: (os.mkfifo(t / "f.json"), ["mesh", str(t / "f.json")])[1], "regular file"),
     "obj zero-based": (lambda t: ["mesh", _write(t, "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")],
                        "count from 1"),

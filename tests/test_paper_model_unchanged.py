@@ -2,8 +2,8 @@
 
 The golden reports in ``tests/golden/`` were written by the code of commit d47a0b9 (the
 last one before pads became the default) with the same commands; every key and every
-number must be identical now, except the wall-clock timings. The only addition allowed is
-the ``model`` key.
+number must be identical now, except the wall-clock timings. The only additions allowed
+are the ``model`` key and the ``provenance`` block (version and input hashes).
 """
 
 from __future__ import annotations
@@ -30,7 +30,8 @@ CASES = [
 
 def _without_timings(obj):
     if isinstance(obj, dict):
-        return {k: _without_timings(v) for k, v in obj.items() if k not in ("timings_s", "seconds")}
+        return {k: _without_timings(v) for k, v in obj.items()
+                if k not in ("timings_s", "seconds", "provenance")}
     if isinstance(obj, list):
         return [_without_timings(v) for v in obj]
     return obj

@@ -3,8 +3,9 @@
 Every input file goes through :func:`read_text_file` (a regular file of bounded size, in
 UTF-8 — or UTF-16 with a byte-order mark) and JSON through :func:`parse_json`, which
 refuses what the standard parser lets through or dies on: duplicate keys (``"units"``
-twice would silently keep the last), ``NaN``/``Infinity``, integers too long to be a
-length or a count, and nesting deeper than any input of ours needs.
+twice would silently keep the last), integers too long to be a length or a count, and
+nesting deeper than any input of ours needs. (``NaN``/``Infinity`` parse, so that the
+readers' field checks name the field.)
 """
 
 from __future__ import annotations
@@ -74,10 +75,6 @@ def _int(text: str) -> int:
     return int(text)
 
 
-def _constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a number JSON allows; give a finite number")
-
-
 def _depth_ok(text: str) -> bool:
     """Whether brackets nest at most MAX_DEPTH deep (strings skipped), in linear time."""
     depth = 0
@@ -97,8 +94,8 @@ def parse_json(text: str, source: str, error: type[DeformClosureError], what: st
     if not _depth_ok(text):
         raise error(f"{source}: JSON nested more than {MAX_DEPTH} deep; not a {what}")
     try:
-        return json.loads(text, object_pairs_hook=_no_duplicates, parse_int=_int,
-                          parse_constant=_constant)
+        # NaN/Infinity parse: the field validators then name the offending field.
+        return json.loads(text, object_pairs_hook=_no_duplicates, parse_int=_int)
     except json.JSONDecodeError as err:
         raise error(f"{source}: not valid JSON (line {err.lineno} column {err.colno}: {err.msg}); "
                     f"fix the {what}'s syntax") from None

@@ -117,13 +117,28 @@ class _PartModel(BaseModel):
         return v
 
 
+_KEYS = {(): set(_PartModel.model_fields), ("material",): set(_MaterialModel.model_fields),
+         ("mesh",): set(_MeshModel.model_fields)}
+
+
+def _nearest_key(loc: tuple) -> str:
+    """'did you mean …' for a misspelt key, else the list of allowed keys."""
+    import difflib
+
+    allowed = sorted(_KEYS.get(tuple(str(p) for p in loc[:-1]), set()))
+    close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
+    if close:
+        return f"did you mean {close[0]!r}?"
+    return f"remove it (allowed here: {', '.join(allowed)})" if allowed else "remove it"
+
+
 def _pydantic_message(err: ValidationError) -> str:
     """One line naming the first offending field and what is wrong with it."""
     e = err.errors()[0]
     loc = ".".join(str(p) for p in e["loc"]) or "part"
     kind = e["type"]
     if kind == "extra_forbidden":
-        return f"{loc}: unknown key; remove it (allowed keys are listed in the part-file format, SPEC §5)"
+        return f"{loc}: unknown key; {_nearest_key(e['loc'])}"
     if kind == "missing":
         return f"{loc}: required field is missing; add it"
     if kind == "literal_error":

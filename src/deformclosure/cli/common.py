@@ -50,13 +50,40 @@ def json_safe(obj: Any) -> Any:
     return obj
 
 
+#: The real standard output while a command writes its report there (``-o -``): every
+#: human-readable line then goes to standard error, so stdout is pure JSON.
+REPORT_STDOUT = None
+
+#: Input files of the running command (set by ``main``), recorded in its report.
+INPUTS: list = []
+
+
+def provenance() -> dict:
+    """Package version and the name and SHA-256 of every input file of the command."""
+    import hashlib
+
+    from .. import __version__
+
+    files = []
+    for p in INPUTS:
+        try:
+            digest = hashlib.sha256(Path(p).read_bytes()).hexdigest()
+        except OSError:
+            continue
+        files.append({"name": Path(p).name, "sha256": digest})
+    return {"package": "deformclosure", "version": __version__, "inputs": files}
+
+
 def write_json(report: dict, path: str | Path | None) -> None:
     """Write ``report`` as JSON to ``path`` (nothing if ``None``; ``-`` is stdout)."""
+    import sys
+
     if path is None:
         return
+    report = {**report, "provenance": provenance()}
     text = json.dumps(json_safe(report), indent=2, allow_nan=False)
     if str(path) == "-":
-        print(text)
+        print(text, file=REPORT_STDOUT or sys.stdout, flush=True)
         return
     write_text_atomic(path, text + "\n", "report")
 

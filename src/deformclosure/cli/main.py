@@ -52,8 +52,41 @@ def _register() -> None:
 _register()
 
 
+def _report_to_stdout(argv: list[str]) -> bool:
+    """Whether the command line asks for the JSON report on stdout (``-o -``)."""
+    return any((a in ("-o", "--output") and i + 1 < len(argv) and argv[i + 1] == "-")
+               or a in ("-o-", "--output=-") for i, a in enumerate(argv))
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the exit code (0 ok, 2 bad input)."""
+    """Run the CLI; return the exit code (0 ok, 2 bad input).
+
+    With ``-o -`` the report is the only thing on standard output; all human-readable text
+    goes to standard error.
+    """
+    from . import common
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    real_stdout = sys.stdout
+    if _report_to_stdout(args):
+        common.REPORT_STDOUT, sys.stdout = real_stdout, sys.stderr
+    common.INPUTS = _input_files(args)
+    try:
+        return _main(args)
+    finally:
+        sys.stdout, common.REPORT_STDOUT, common.INPUTS = real_stdout, None, []
+
+
+def _input_files(argv: list[str]) -> list[str]:
+    """The existing regular files named on the command line, outputs excluded."""
+    import os
+
+    outputs = {argv[i + 1] for i, a in enumerate(argv[:-1])
+               if a in ("-o", "--output", "--plot", "--export-graph", "--out")}
+    return [a for a in argv if a not in outputs and not a.startswith("-") and os.path.isfile(a)]
+
+
+def _main(argv: list[str]) -> int:
     try:
         rv = cli.main(args=argv, prog_name="deformclosure", standalone_mode=False)
     except DeformClosureError as err:

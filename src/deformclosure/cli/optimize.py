@@ -167,7 +167,7 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
     report = res.to_dict()
     fine = res.finest
     s = 1.0 / length_scale(unit)
-    click.echo(f"model: pads (SPEC §6), W = {pad.width * s:.4g} {unit}, rho = {pad.radius * s:.4g} {unit}; "
+    click.echo(f"model: pads, W = {pad.width * s:.4g} {unit}, rho = {pad.radius * s:.4g} {unit}; "
                f"axis through ({fine.axis.point[0] * s:.4g}, {fine.axis.point[1] * s:.4g}) {unit} "
                f"at {np.degrees(fine.axis.angle):.4g} deg")
     click.echo(f"sigma0 = {fine.sigma0 * s:.6g} {unit}  sigma_L = {fine.sigma_L * s:.6g} {unit}  "

@@ -64,7 +64,8 @@ def mesh_from_dict(data: Any) -> Mesh:
     """
     if not isinstance(data, dict):
         raise MeshError("mesh file: top level must be a JSON object {...}")
-    allowed = {"format", "name", "units", "nodes", "triangles", "boundary", "material"}
+    allowed = {"format", "name", "units", "nodes", "triangles", "boundary", "material",
+               "provenance"}   # provenance: written by the CLI, not read
     extra = set(data) - allowed
     if extra:
         raise MeshError(f"{sorted(extra)[0]}: unknown key in mesh file; remove it")
@@ -82,9 +83,10 @@ def mesh_from_dict(data: Any) -> Mesh:
             isinstance(r, list) and all(isinstance(v, kinds) and not isinstance(v, bool) for v in r)
             for r in rows)
 
-    if not _numbers(data["nodes"], (int, float)) or not _numbers(data["triangles"], int):
-        raise MeshError("nodes/triangles: must be lists of [x, y] numbers and [i, j, k] integers "
-                        "(no strings or booleans)")
+    if not _numbers(data["nodes"], (int, float)):
+        raise MeshError("nodes: must be a list of [x, y] numbers (no strings or booleans)")
+    if not _numbers(data["triangles"], int):
+        raise MeshError("triangles: must be a list of [i, j, k] node ids, integers")
     try:
         nodes = np.asarray(data["nodes"], dtype=float) * scale
         tris_raw = np.asarray(data["triangles"])
