@@ -119,3 +119,39 @@ def test_readers_raise_only_their_own_errors(data):
             reader(data)
         except DeformClosureError:
             pass
+
+
+@pytest.mark.parametrize("change,pattern", [
+    (lambda d: d.update(units="m"), "units"),                              # a 12 x 20 m part
+    (lambda d: d["material"].update(youngs_modulus=2), "pascals"),         # E = 2 Pa
+])
+def test_unit_sanity_warning(change, pattern, tmp_path):
+    data = json.loads(RECT.read_text())
+    change(data)
+    p = _write(tmp_path, "p.json", json.dumps(data))
+    proc = subprocess.run([sys.executable, "-m", "deformclosure", "mesh", p], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0
+    warn = [ln for ln in proc.stderr.splitlines() if ln.startswith("warning:")]
+    assert len(warn) == 1 and pattern in warn[0], proc.stderr
+
+
+def test_unknown_key_names_the_nearest_one(tmp_path, capsys):
+    data = json.loads(RECT.read_text())
+    data["hole"] = data.pop("holes")
+    assert main(["mesh", _write(tmp_path, "p.json", json.dumps(data))]) == 2
+    assert "did you mean 'holes'" in capsys.readouterr().err
+
+
+def test_report_on_stdout_is_pure_json_with_provenance(tmp_path):
+    import hashlib
+
+    proc = subprocess.run([sys.executable, "-m", "deformclosure", "optimize", str(RECT), "--model",
+                           "paper", "--at", "0,10", "12,10", "-o", "-"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0
+    report = json.loads(proc.stdout)                 # nothing but the JSON on stdout
+    assert "sigma0" in proc.stderr                   # the human summary went to stderr
+    prov = report["provenance"]
+    assert prov["inputs"] == [{"name": "rectangle.json",
+                               "sha256": hashlib.sha256(RECT.read_bytes()).hexdigest()}]

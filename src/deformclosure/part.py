@@ -321,6 +321,24 @@ class Part:
         d = self.outer[:, None, :] - self.outer[None, :, :]
         return float(np.sqrt((d**2).sum(-1)).max())
 
+    def sanity_warnings(self) -> list[str]:
+        """Hints that the file's ``units`` or modulus are probably not what was meant.
+
+        A deformable part a gripper holds is between 0.1 mm and 10 m across, and the
+        Young's modulus of soft solids is between 1 kPa and 1 TPa; outside, the numbers are
+        most likely in the wrong unit (a 12 × 20 m rubber part, E = 2 Pa).
+        """
+        out = []
+        d = self.diameter
+        if d > 10.0 or d < 1e-4:
+            out.append(f"the part is {d:.3g} m across; check 'units' ({self.units!r}): every "
+                       "length in the file is in that unit")
+        E = self.material.youngs_modulus
+        if E < 1e3 or E > 1e12:
+            out.append(f"material.youngs_modulus = {E:.3g} Pa; it is in pascals (soft rubber is "
+                       "about 1e6)")
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict in SI units (``units = "m"``)."""
         opts = self.mesh_options

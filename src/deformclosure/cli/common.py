@@ -29,7 +29,16 @@ def load_part_or_mesh(path: str | Path, points: np.ndarray | None = None
         mesh = read_mesh(path)
         return None, mesh
     part = Part.from_file(path)
+    warn_part(part)
     return part, mesh_part(part, points=points)
+
+
+def warn_part(part: Part) -> None:
+    """Print the part's unit-sanity warnings on standard error."""
+    import click
+
+    for w in part.sanity_warnings():
+        click.echo(f"warning: {w}", err=True)
 
 
 def json_safe(obj: Any) -> Any:

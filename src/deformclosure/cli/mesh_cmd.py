@@ -8,7 +8,7 @@ from ..errors import DeformClosureError
 from ..mesh import mesh_part, read_mesh, write_mesh
 from ..mesh.io import is_mesh_file, mesh_to_dict
 from ..part import Part
-from .common import write_json
+from .common import write_json, warn_part
 
 __all__ = ["command"]
 
@@ -43,6 +43,7 @@ def command(part: str, output: str | None, max_area: float | None, min_angle: fl
         units = "mm"
     else:
         p = Part.from_file(part)
+        warn_part(p)
         s = length_scale(p.units)
         mesh = mesh_part(p, max_area=None if max_area is None else max_area * s * s,
                          min_angle=min_angle)

@@ -48,6 +48,10 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
         raise DeformClosureError(f"{path}: file not found; give a part file (.json) or a mesh file")
     mesh_file = is_mesh_file(p)
     part = None if mesh_file else Part.from_file(p)
+    if part is not None:
+        from .common import warn_part
+
+        warn_part(part)
     unit = units if units is not None else ("m" if part is None else part.units)
     scale = length_scale(unit, "--units")
     pts = None
