@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 
@@ -63,8 +64,9 @@ def json_safe(obj: Any) -> Any:
 #: human-readable line then goes to standard error, so stdout is pure JSON.
 REPORT_STDOUT = None
 
-#: Input files of the running command (set by ``main``), recorded in its report.
-INPUTS: list = []
+#: Input files of the running command (set by ``main`` and the batch runner), recorded in
+#: its report; a context variable, so concurrent jobs in threads keep their own.
+INPUTS: ContextVar[tuple] = ContextVar("deformclosure_inputs", default=())
 
 
 def provenance() -> dict:
@@ -74,7 +76,7 @@ def provenance() -> dict:
     from .. import __version__
 
     files = []
-    for p in INPUTS:
+    for p in INPUTS.get():
         try:
             digest = hashlib.sha256(Path(p).read_bytes()).hexdigest()
         except OSError:

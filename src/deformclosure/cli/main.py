@@ -70,11 +70,12 @@ def main(argv: list[str] | None = None) -> int:
     real_stdout = sys.stdout
     if _report_to_stdout(args):
         common.REPORT_STDOUT, sys.stdout = real_stdout, sys.stderr
-    common.INPUTS = _input_files(args)
+    token = common.INPUTS.set(tuple(_input_files(args)))
     try:
         return _main(args)
     finally:
-        sys.stdout, common.REPORT_STDOUT, common.INPUTS = real_stdout, None, []
+        sys.stdout, common.REPORT_STDOUT = real_stdout, None
+        common.INPUTS.reset(token)
 
 
 def _input_files(argv: list[str]) -> list[str]:

@@ -214,6 +214,7 @@ class Job:
 
 def _command(name: str, where: str):
     """The click command ``name``, checked to be a job command."""
+    from ..cli.common import INPUTS
     from ..cli.main import cli
 
     choices = sorted(set(cli.commands) - _NOT_JOBS)
@@ -542,6 +543,7 @@ def run_job(payload: dict) -> dict:
 def _execute(payload: dict, names: dict[str, str]) -> str | None:
     import click
 
+    from ..cli.common import INPUTS
     from ..cli.main import cli
 
     if payload["version"] != _version():
@@ -554,14 +556,17 @@ def _execute(payload: dict, names: dict[str, str]) -> str | None:
         part.write_bytes(payload["part_bytes"])
         names[str(part)] = payload["part"]
         argv = list(payload["argv"])
+        files = [str(part)]
         for j, (index, name, data, shown) in enumerate(payload["inputs"]):
             f = tmp / f"input{j}" / name
             f.parent.mkdir()
             f.write_bytes(data)
             argv[index] = str(f)
             names[str(f)] = shown
+            files.append(str(f))
         report = tmp / "report.json"
         buf = io.StringIO()
+        token = INPUTS.set(tuple(files))    # the report's provenance: the job's own inputs
         with _captured(buf):
             try:
                 rv = cli.main(args=[payload["command"], str(part), *argv, "-o", str(report)],
@@ -570,6 +575,8 @@ def _execute(payload: dict, names: dict[str, str]) -> str | None:
                 rv = err.exit_code
             except click.ClickException as err:
                 raise _JobFailed(err.format_message()) from None
+            finally:
+                INPUTS.reset(token)
         if rv not in (None, 0):
             lines = [ln for ln in buf.getvalue().splitlines() if ln.strip()]
             raise _JobFailed(lines[-1] if lines else f"the command returned exit code {rv}")
