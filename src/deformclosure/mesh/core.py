@@ -279,12 +279,9 @@ class Mesh:
     def diameter(self) -> float:
         """Largest distance between two boundary nodes (m)."""
         if "diameter" not in self._cache:
-            p = self.nodes[self.outer_loop]
-            # Diameter is attained on the convex hull; hull keeps this cheap.
-            from scipy.spatial import ConvexHull
-            h = p[ConvexHull(p).vertices] if len(p) > 3 else p
-            d = h[:, None, :] - h[None, :, :]
-            self._cache["diameter"] = float(np.sqrt((d**2).sum(-1)).max())
+            from ..geometry import point_set_diameter
+
+            self._cache["diameter"] = point_set_diameter(self.nodes[self.outer_loop])
         return self._cache["diameter"]
 
     def min_angles(self) -> np.ndarray:
