@@ -35,6 +35,7 @@ __all__ = [
     "MeshOptions",
     "Part",
     "demo_part",
+    "read_material",
     "MAX_TRIANGLES",
 ]
 
@@ -132,13 +133,20 @@ def _nearest_key(loc: tuple) -> str:
     return f"remove it (allowed here: {', '.join(allowed)})" if allowed else "remove it"
 
 
-def _pydantic_message(err: ValidationError) -> str:
-    """One line naming the first offending field and what is wrong with it."""
+def _pydantic_message(err: ValidationError, within: tuple = (), shown: str | None = None) -> str:
+    """One line naming the first offending field and what is wrong with it.
+
+    ``within``: the location of the validated block inside a part file (for the key
+    hints); ``shown``: how to name that block in the message (default its location)."""
     e = err.errors()[0]
-    loc = ".".join(str(p) for p in e["loc"]) or "part"
+    full = (*within, *e["loc"])
+    names = [str(p) for p in e["loc"]]
+    if within:
+        names = [shown or ".".join(map(str, within)), *names]
+    loc = ".".join(names) or "part"
     kind = e["type"]
     if kind == "extra_forbidden":
-        return f"{loc}: unknown key; {_nearest_key(e['loc'])}"
+        return f"{loc}: unknown key; {_nearest_key(full)}"
     if kind == "missing":
         return f"{loc}: required field is missing; add it"
     if kind == "literal_error":
@@ -186,6 +194,48 @@ class Material:
             raise PartError(f"material.critical_distance = {cd!r}: must be a finite length >= 0 "
                             "in the part's units (or omit it for 2 % of the part's diameter)")
 
+    @classmethod
+    def from_dict(cls, data: Any, scale: float = 1.0, where: str = "material") -> "Material":
+        """Validated material from the ``"material"`` block of a part file (SPEC §5).
+
+        Parameters
+        ----------
+        data : dict
+            ``youngs_modulus`` (Pa), ``poisson_ratio``, ``thickness`` (default 1),
+            ``elastic_limit_strain``, optional ``plane`` and ``critical_distance``.
+        scale : float
+            Metres per unit of ``thickness`` and ``critical_distance``.
+        where : str
+            Name of the block in error messages.
+
+        Raises
+        ------
+        PartError
+
+        Examples
+        --------
+        >>> Material.from_dict({"youngs_modulus": 2e6, "poisson_ratio": 0.1,
+        ...                     "thickness": 1, "elastic_limit_strain": 0.8}, 1e-3).thickness
+        0.001
+        """
+        if not isinstance(data, dict):
+            raise PartError(f"{where}: must be a JSON object with youngs_modulus, poisson_ratio, "
+                            "thickness and elastic_limit_strain")
+        try:
+            mat = _MaterialModel.model_validate(data)
+        except ValidationError as err:
+            raise PartError(_pydantic_message(err, ("material",), where)) from None
+        _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
+                        mat.elastic_limit_strain, mat.plane, prefix=where)
+        cd = mat.critical_distance
+        if cd is not None and not (math.isfinite(cd) and cd >= 0):
+            raise PartError(f"{where}.critical_distance = {cd!r}: must be a finite length >= 0 "
+                            "(or omit it for 2 % of the part's diameter)")
+        if not math.isfinite(mat.thickness * scale) or mat.thickness * scale <= 0:
+            raise PartError(f"{where}.thickness = {mat.thickness!r}: out of range in these units")
+        return cls(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
+                   mat.elastic_limit_strain, mat.plane, None if cd is None else cd * scale)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict in SI units (thickness and critical distance in m)."""
         d = {
@@ -198,6 +248,50 @@ class Material:
         if self.critical_distance is not None:
             d["critical_distance"] = self.critical_distance
         return d
+
+
+def read_material(source: str, units: str = "m", where: str = "--material") -> Material:
+    """The material given on a command line: a JSON file or inline JSON text.
+
+    Parameters
+    ----------
+    source : str
+        Inline JSON (starting with ``{``) or the path of a JSON file holding either a
+        material object (the ``"material"`` block of a part file, optionally with its own
+        ``"units"``) or a whole part or mesh file, whose material and units are taken.
+    units : str
+        Unit of ``thickness`` and ``critical_distance`` when the source states none.
+    where : str
+        Name of the option in error messages.
+
+    Raises
+    ------
+    PartError
+
+    Examples
+    --------
+    >>> read_material('{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 2,'
+    ...               ' "elastic_limit_strain": 0.8, "units": "mm"}').thickness
+    0.002
+    """
+    from .jsonfile import parse_json, read_json
+
+    text = source.strip()
+    if text.startswith("{"):
+        data = parse_json(text, where, PartError, "material")
+    else:
+        data = read_json(Path(source), PartError, "material file")
+    if not isinstance(data, dict):
+        raise PartError(f"{where}: expected a JSON object with youngs_modulus, poisson_ratio, "
+                        "thickness and elastic_limit_strain")
+    data = dict(data)
+    unit = data.pop("units", units)
+    if "material" in data:       # a part or mesh file: its material block, its units
+        data = data["material"]
+    if not isinstance(unit, str) or unit not in LENGTH_UNITS:
+        valid = ", ".join(repr(u) for u in LENGTH_UNITS)
+        raise PartError(f"{where}.units = {unit!r}: unknown length unit; use one of {valid}")
+    return Material.from_dict(data, length_scale(unit, "units"), where)
 
 
 def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
@@ -283,16 +377,7 @@ class Part:
             raise PartError(f"units: unknown length unit {model.units!r}; use one of {valid}")
         outer = _clean_ring(model.outer, "outer") * scale
         holes = tuple(_clean_ring(h, f"holes[{i}]") * scale for i, h in enumerate(model.holes))
-        mat = model.material
-        _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
-                        mat.elastic_limit_strain, mat.plane, prefix="material")
-        if mat.critical_distance is not None and not (
-                math.isfinite(mat.critical_distance) and mat.critical_distance >= 0):
-            raise PartError(f"material.critical_distance = {mat.critical_distance!r}: must be a "
-                            "finite length >= 0 in the part's units (or omit it)")
-        cd = None if mat.critical_distance is None else mat.critical_distance * scale
-        material = Material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
-                            mat.elastic_limit_strain, mat.plane, cd)
+        material = Material.from_dict(data["material"], scale)
         outer, holes = _validate_geometry(outer, holes)
         opts = _validate_mesh_options(model.mesh, scale, outer, holes)
         return cls(model.name, model.units, outer, holes, material, opts)

@@ -8,7 +8,7 @@ import click
 import numpy as np
 
 from ..errors import DeformClosureError
-from .common import load_part_or_mesh, write_json
+from .common import load_part_or_mesh, mesh_input_options, write_json
 
 __all__ = ["command", "contact_points"]
 
@@ -57,7 +57,9 @@ def contact_points(part, fingers) -> np.ndarray:
               help="Write the JSON report here ('-' for stdout).")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Draw the part, fingers, contact forces and escaping motion (PNG/SVG).")
-def command(part: str, finger_file: str, output: str | None, plot: str | None) -> int:
+@mesh_input_options()
+def command(part: str, finger_file: str, output: str | None, plot: str | None,
+            material: str | None, units: str | None) -> int:
     """Deform closure of a contact set: equilibrium, contact forces, verdict, certificate.
 
     PART is a part file (JSON) or a mesh file.
@@ -77,9 +79,7 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None) -
     pts = None
     if not is_mesh_file(p):
         pts = contact_points(Part.from_file(p), fingers)
-    part_obj, mesh = load_part_or_mesh(p, points=pts)
-    if mesh.material is None:
-        raise DeformClosureError(f"{part}: the mesh has no material; add one to the mesh file")
+    part_obj, mesh = load_part_or_mesh(p, points=pts, units=units, material=material)
     res = deform_closure(mesh, fingers)
     report = res.to_dict()
     eq = res.equilibrium

@@ -15,23 +15,88 @@ from ..outputs import write_text_atomic
 from ..mesh import Mesh, mesh_part, read_mesh
 from ..mesh.io import is_mesh_file
 from ..part import Part
+from ..units import length_scale
 
 __all__ = ["load_part_or_mesh", "write_json", "json_safe", "parse_xy", "pad_from_options",
-           "pad_options", "check_grid", "lazy_progress"]
+           "pad_options", "check_grid", "lazy_progress", "with_verbosity", "VERBOSITY",
+           "mesh_input_options"]
 
 
-def load_part_or_mesh(path: str | Path, points: np.ndarray | None = None
-                      ) -> tuple[Part | None, Mesh]:
-    """Read a part file (and mesh it, inserting ``points`` in m) or a mesh file."""
+def load_part_or_mesh(path: str | Path, points: np.ndarray | None = None,
+                      units: str | None = None, material: str | None = None,
+                      need_material: bool = True) -> tuple[Part | None, Mesh]:
+    """Read a part file (and mesh it, inserting ``points`` in m) or a mesh file.
+
+    Parameters
+    ----------
+    path : path-like
+    points : ndarray, shape (k, 2), optional
+        Points (m) to insert as mesh nodes (part files only).
+    units : str, optional
+        ``--units``: the unit of a meshio file's coordinates (default m) and of a
+        ``--material`` that states none (default: the part's units, else m).
+    material : str, optional
+        ``--material``: inline JSON or a JSON file (:func:`deformclosure.part.read_material`);
+        it replaces the file's material.
+    need_material : bool
+        Refuse a mesh that ends up without a material, naming ``--material``.
+    """
+    from ..part import read_material
+
     path = Path(path)
     if not path.exists():
         raise DeformClosureError(f"{path}: file not found; give a part file (.json) or a mesh file")
+    if units is not None:
+        length_scale(units, "--units")
     if is_mesh_file(path):
-        mesh = read_mesh(path)
+        mat = None if material is None else read_material(material, units or "m")
+        mesh = read_mesh(path, units=units or "m", material=mat)
+        if need_material and mesh.material is None:
+            raise DeformClosureError(
+                f"{path}: the mesh file has no material; give --material FILE or --material "
+                "'{\"youngs_modulus\": 2e6, \"poisson_ratio\": 0.1, \"thickness\": 1, "
+                "\"elastic_limit_strain\": 0.8, \"units\": \"mm\"}'")
         return None, mesh
-    part = Part.from_file(path)
-    warn_part(part)
+    part = read_part(path, units, material)
     return part, mesh_part(part, points=points)
+
+
+def read_part(path: str | Path, units: str | None = None, material: str | None = None) -> Part:
+    """Read a part file, give it the ``--material`` if one is given (lengths in ``units``,
+    default the part's), and print its unit-sanity warnings."""
+    import dataclasses
+
+    from ..part import read_material
+
+    part = Part.from_file(path)
+    if material is not None:
+        part = dataclasses.replace(part, material=read_material(material, units or part.units))
+    warn_part(part)
+    return part
+
+
+def mesh_input_options(units: bool = True):
+    """Click options of every command that reads a part or mesh: ``--material`` and, when
+    the command has none yet (``units=True``), ``--units``."""
+    import click
+
+    opts = [click.option(
+        "--material", type=str, default=None, metavar="FILE|JSON",
+        help="Material replacing the input's (needed for mesh files without one): a JSON "
+             "file or inline JSON with youngs_modulus (Pa), poisson_ratio, thickness, "
+             "elastic_limit_strain [, plane, critical_distance, units].")]
+    if units:
+        opts.append(click.option(
+            "--units", type=str, default=None,
+            help="Unit of the lengths given here and of a meshio file's coordinates "
+                 "(m, cm, mm, in; default: the part file's units, m for mesh files)."))
+
+    def decorate(fn):
+        for opt in reversed(opts):
+            fn = opt(fn)
+        return fn
+
+    return decorate
 
 
 def warn_part(part: Part) -> None:
@@ -140,6 +205,7 @@ def lazy_progress(quiet: bool, desc: str, unit: str):
     from tqdm import tqdm
 
     state = {"bar": None}
+    quiet = quiet or VERBOSITY.get() == 0
 
     def progress(done: int, total: int) -> None:
         if quiet:
@@ -177,3 +243,83 @@ def pad_options(angles: int, offsets: int):
         return fn
 
     return decorate
+
+
+#: 0 ``--quiet``, 1 normal, 2 ``--verbose``: of the running command (a context variable,
+#: so batch jobs running in threads keep their own).
+VERBOSITY: ContextVar[int] = ContextVar("deformclosure_verbosity", default=1)
+
+
+def with_verbosity(command, keep_stdout: bool = False):
+    """Give ``command`` the ``--quiet`` and ``--verbose`` options every command has.
+
+    ``--quiet``: no progress bars and no human-readable lines on standard output (the
+    report of ``-o -``, errors and warnings still appear). ``--verbose``: also log each
+    main step of the library with its time on standard error. A command that already
+    declares ``--quiet`` receives the flag itself as well. ``keep_stdout``: standard output
+    is the command's product (``results``), kept under ``--quiet``.
+    """
+    import functools
+    import sys
+
+    import click
+
+    own = {p.name: p for p in command.params}
+    for name, short in (("quiet", "-q"), ("verbose", "-v")):
+        taken = {o for p in command.params for o in getattr(p, "opts", ())}
+        if name in own and short not in taken:
+            own[name].opts.append(short)
+    if "quiet" not in own:
+        command.params.append(click.Option(
+            ["--quiet", "-q"], is_flag=True,
+            help="Only the report, errors and warnings: no progress, no summary lines."))
+    if "verbose" not in own:
+        command.params.append(click.Option(
+            ["--verbose", "-v"], is_flag=True,
+            help="Also log each step (meshing, factorisation, solves) with its time on stderr."))
+    callback = command.callback
+
+    @functools.wraps(callback)
+    def run(*args, **kwargs):
+        quiet = kwargs["quiet"] if "quiet" in own else kwargs.pop("quiet")
+        verbose = kwargs["verbose"] if "verbose" in own else kwargs.pop("verbose")
+        if quiet and verbose:
+            raise DeformClosureError("--quiet/--verbose: give at most one of them")
+        token = VERBOSITY.set(0 if quiet else 2 if verbose else 1)
+        handler = None
+        if verbose:
+            from ..log import show_steps
+
+            handler = show_steps(sys.stderr)
+        global REPORT_STDOUT
+        silenced = quiet and not keep_stdout and _may_swap_stdout()
+        saved = (sys.stdout, REPORT_STDOUT)
+        if silenced:
+            import os
+
+            REPORT_STDOUT = REPORT_STDOUT or sys.stdout
+            sys.stdout = open(os.devnull, "w", encoding="utf-8")
+        try:
+            return callback(*args, **kwargs)
+        finally:
+            if silenced:
+                sys.stdout.close()
+                sys.stdout, REPORT_STDOUT = saved
+            if handler is not None:
+                from ..log import logger
+
+                logger.removeHandler(handler)
+            VERBOSITY.reset(token)
+
+    command.callback = run
+    return command
+
+
+def _may_swap_stdout() -> bool:
+    """Whether ``sys.stdout`` may be replaced: only in the main thread, never while the batch
+    runner routes each thread's output to its own buffer (it keeps a job's lines anyway)."""
+    import sys
+    import threading
+
+    return (threading.current_thread() is threading.main_thread()
+            and type(sys.stdout).__name__ != "_ThreadRouter")

@@ -39,14 +39,13 @@ def cli() -> None:
 def _register() -> None:
     from . import batch, check, demo, mesh_cmd, optimize, plan, results, slice
 
-    cli.add_command(demo.command, "demo")
-    cli.add_command(mesh_cmd.command, "mesh")
-    cli.add_command(check.command, "check")
-    cli.add_command(slice.command, "slice")
-    cli.add_command(optimize.command, "optimize")
-    cli.add_command(plan.command, "plan")
-    cli.add_command(batch.command, "batch")
-    cli.add_command(results.command, "results")
+    from .common import with_verbosity
+
+    for name, module in (("demo", demo), ("mesh", mesh_cmd), ("check", check),
+                         ("slice", slice), ("optimize", optimize), ("plan", plan),
+                         ("batch", batch), ("results", results)):
+        # `results` prints its table on stdout as its product: --quiet keeps it.
+        cli.add_command(with_verbosity(module.command, keep_stdout=name == "results"), name)
 
 
 _register()

@@ -8,12 +8,12 @@ import click
 import numpy as np
 
 from ..errors import DeformClosureError, GraspError
-from ..mesh import mesh_part, read_mesh
+from ..mesh import mesh_part
 from ..mesh.io import is_mesh_file
-from ..part import Part, PartError
+from ..part import PartError
 from ..units import length_scale
 from ..outputs import check_outputs, write_text_atomic
-from .common import json_safe, pad_options, parse_xy, write_json
+from .common import json_safe, mesh_input_options, pad_options, parse_xy, write_json
 
 __all__ = ["command", "load_grasp_inputs"]
 
@@ -34,7 +34,8 @@ report is SI throughout and says which model made it.
 """
 
 
-def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
+def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None,
+                      material: str | None = None):
     """Read a part (meshing it with the ``--at`` points inserted) or a mesh file.
 
     Returns
@@ -43,34 +44,30 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
     """
     from pathlib import Path
 
+    from .common import load_part_or_mesh, read_part
+
     p = Path(path)
     if not p.exists():
         raise DeformClosureError(f"{path}: file not found; give a part file (.json) or a mesh file")
-    mesh_file = is_mesh_file(p)
-    part = None if mesh_file else Part.from_file(p)
-    if part is not None:
-        from .common import warn_part
-
-        warn_part(part)
+    part = None if is_mesh_file(p) else read_part(p, units, material)
     unit = units if units is not None else ("m" if part is None else part.units)
     scale = length_scale(unit, "--units")
     pts = None
     if at:
         pts = np.array([parse_xy(s, "--at") for s in at]) * scale
     if part is None:
-        mesh = read_mesh(p)
-    else:
-        far = 100 * part.diameter + float(np.abs(part.outer).max())
-        if pts is not None and np.abs(pts).max() > far:
-            raise GraspError(f"--at: a jaw position is far outside the part ({', '.join(at)} "
-                             f"{unit}); check the values and --units")
-        try:
-            mesh = mesh_part(part, points=pts)
-        except PartError as err:   # name the option, not the mesher's internal point list
-            if "points[" not in str(err):
-                raise
-            raise GraspError(f"--at: a jaw position lies outside the part "
-                             f"({', '.join(at)} {unit}); move it onto the part's boundary") from None
+        return load_part_or_mesh(p, units=units, material=material)[1], unit, scale, pts
+    far = 100 * part.diameter + float(np.abs(part.outer).max())
+    if pts is not None and np.abs(pts).max() > far:
+        raise GraspError(f"--at: a jaw position is far outside the part ({', '.join(at)} "
+                         f"{unit}); check the values and --units")
+    try:
+        mesh = mesh_part(part, points=pts)
+    except PartError as err:   # name the option, not the mesher's internal point list
+        if "points[" not in str(err):
+            raise
+        raise GraspError(f"--at: a jaw position lies outside the part "
+                         f"({', '.join(at)} {unit}); move it onto the part's boundary") from None
     return mesh, unit, scale, pts
 
 
@@ -99,21 +96,22 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None):
                    "mid-point or the --axis point).")
 @click.option("--jaw-width", type=float, default=0.0, show_default=True,
               help="paper model: jaw contact width (0 = point jaws).")
-@click.option("--units", type=str, default=None, help="Unit of the lengths given here (m, cm, mm, in).")
+@mesh_input_options()
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="JSON report (SI units).")
 @click.option("--plot", type=click.Path(file_okay=False), help="Folder for the plots.")
 @click.option("--export-graph", type=click.Path(dir_okay=False),
               help="paper model: write the contact graph (JSON).")
 @click.option("--quiet", is_flag=True, help="No progress output.")
 def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets,
-            method, eps, expanding, jaw_width, units, output, plot, export_graph, quiet) -> int:
+            method, eps, expanding, jaw_width, material, units, output, plot, export_graph,
+            quiet) -> int:
     """Optimal separation σ* maximising Q = min(U_A, U_L) for one grasp."""
     check_outputs([output, export_graph], [plot], [part])
     if model is None:
         model = "paper" if jaws is not None else "pads"
     if model == "paper":
-        return _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot,
-                      export_graph)
+        return _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, output,
+                      plot, export_graph)
     bad = [name for name, given in (("--jaws", jaws is not None),
                                     ("--jaw-width", jaw_width != 0.0), ("--eps", eps is not None),
                                     ("--export-graph", export_graph is not None),
@@ -122,7 +120,7 @@ def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_ang
         raise GraspError(f"{bad[0]}: belongs to the paper model; add --model paper, or give the "
                          "pads an axis with --at X,Y X,Y or --axis X,Y,DEG")
     return _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-                 output, plot, quiet, expanding)
+                 material, output, plot, quiet, expanding)
 
 
 def parse_axis(at, axis, scale: float):
@@ -145,12 +143,12 @@ def parse_axis(at, axis, scale: float):
 
 
 def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-          output, plot, quiet, expanding=False) -> int:
+          material, output, plot, quiet, expanding=False) -> int:
     from ..pads import pad_grasp
     from .common import check_grid, load_part_or_mesh, pad_from_options
 
     check_grid(grid_angles, grid_offsets)
-    prt, mesh = load_part_or_mesh(part)
+    prt, mesh = load_part_or_mesh(part, units=units, material=material)
     unit = units if units is not None else ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
     ax = parse_axis(at, axis, scale)
@@ -204,7 +202,7 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
     return 0
 
 
-def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plot,
+def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, output, plot,
            export_graph) -> int:
     """The paper's two-jaw model (SPEC §4), unchanged."""
     from ..grasp.analysis import grasp_model, optimize_separation
@@ -214,7 +212,7 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, output, plo
         raise GraspError(f"--eps = {eps!r}: must be a finite energy > 0 in joules")
     if not (np.isfinite(jaw_width) and jaw_width >= 0):
         raise GraspError(f"--jaw-width = {jaw_width!r}: must be a finite length >= 0 (0 = point jaws)")
-    mesh, unit, scale, pts = load_grasp_inputs(part, at, units)
+    mesh, unit, scale, pts = load_grasp_inputs(part, at, units, material)
     if jaw_width * scale > mesh.diameter:
         raise GraspError(f"--jaw-width = {jaw_width:g} {unit}: wider than the part "
                          f"({mesh.diameter / scale:.4g} {unit}); check the value and --units")

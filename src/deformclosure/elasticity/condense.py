@@ -15,11 +15,14 @@ fields (strains at the jaw pair).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import StiffnessError
+from ..log import done
 from .solve import pinned_dofs, rigid_modes
 
 __all__ = ["CondensedCompliance", "node_adjacency", "nested_dissection_order"]
@@ -82,6 +85,7 @@ class CondensedCompliance:
 
     def __init__(self, K: sp.spmatrix, nodes: np.ndarray, triangles: np.ndarray,
                  boundary: np.ndarray) -> None:
+        t0 = time.perf_counter()
         n = len(nodes)
         boundary = np.asarray(boundary, dtype=np.int64)
         self.boundary = boundary
@@ -140,6 +144,8 @@ class CondensedCompliance:
         self.C = C
         self._pos = np.full(n, -1, dtype=np.int64)
         self._pos[boundary] = np.arange(len(boundary))
+        done("factorised K (%d DOFs) and condensed it onto %d boundary nodes", t0, N,
+             len(boundary))
 
     def position(self, node_ids: np.ndarray) -> np.ndarray:
         """Row index (node position in ``boundary``) of node ids; -1 if not condensed."""

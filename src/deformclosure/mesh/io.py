@@ -26,8 +26,8 @@ from ..part import Material
 from ..units import length_scale
 from .core import Mesh
 
-__all__ = ["MESH_FORMAT", "mesh_to_dict", "mesh_from_dict", "read_mesh", "write_mesh",
-           "is_mesh_file"]
+__all__ = ["MESH_FORMAT", "MATERIAL_FORMATS", "mesh_to_dict", "mesh_from_dict", "read_mesh",
+           "write_mesh", "is_mesh_file"]
 
 MESH_FORMAT = "deformclosure-mesh/1"
 
@@ -214,26 +214,86 @@ def read_mesh(path: str | Path, units: str = "m", material: Material | None = No
         except Exception as err:
             raise MeshError(str(err)) from None
         mesh = Mesh.from_arrays(pts[used, :2] * scale, remap[tri], name=path.stem)
+        stored = _material_from_cell_data(m, path)
+        if stored is not None and material is None:
+            if units != "m":
+                raise MeshError(f"{path}: holds a material in SI units (written by deformclosure, "
+                                "lengths in m); read it without --units")
+            material = stored
     if material is not None:
         mesh = mesh.with_material(material)
     return mesh
 
 
-def write_mesh(mesh: Mesh, path: str | Path) -> None:
-    """Write ``mesh`` as mesh JSON (``.json``) or with meshio (any other suffix)."""
+#: meshio formats whose cell data survive a write and a read: the material goes there.
+MATERIAL_FORMATS = (".vtu", ".vtk", ".dat", ".tec", ".avs")
+
+#: Cell-data arrays holding the material (SI; one value per triangle, all equal), so that
+#: ParaView shows them and :func:`read_mesh` restores the material.
+_MATERIAL_FIELDS = ("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain",
+                    "plane_strain", "critical_distance")
+
+
+def _material_cell_data(material: Material, n: int) -> dict[str, list[np.ndarray]]:
+    cd = material.critical_distance
+    values = (material.youngs_modulus, material.poisson_ratio, material.thickness,
+              material.elastic_limit_strain, float(material.plane == "strain"),
+              np.nan if cd is None else cd)
+    return {k: [np.full(n, v, dtype=float)] for k, v in zip(_MATERIAL_FIELDS, values)}
+
+
+def _material_from_cell_data(m: Any, path: Path) -> Material | None:
+    """The material a meshio mesh carries in its triangle cell data (written by us)."""
+    if not all(k in m.cell_data for k in _MATERIAL_FIELDS):
+        return None
+    vals = []
+    for k in _MATERIAL_FIELDS:
+        arr = np.concatenate([np.asarray(a, float).ravel()
+                              for c, a in zip(m.cells, m.cell_data[k]) if c.type == "triangle"])
+        v = arr[0] if arr.size else np.nan
+        same = np.all(arr == v) if not np.isnan(v) else np.all(np.isnan(arr))
+        if not same:
+            raise MeshError(f"{path}: cell data {k!r} differs between triangles; one material "
+                            "per part is supported (give --material to override)")
+        vals.append(float(v))
+    E, nu, t, eL, strain, cd = vals
+    try:
+        return Material(E, nu, t, eL, "strain" if strain == 1.0 else "stress",
+                        None if np.isnan(cd) else cd)
+    except PartError as err:
+        raise MeshError(f"{path}: stored material is invalid ({err}); give --material") from None
+
+
+def write_mesh(mesh: Mesh, path: str | Path) -> bool:
+    """Write ``mesh`` as mesh JSON (``.json``) or with meshio (any other suffix).
+
+    The material goes into the file too: the ``"material"`` block of mesh JSON, or cell
+    data (``youngs_modulus`` Pa, ``poisson_ratio``, ``thickness`` m,
+    ``elastic_limit_strain``, ``plane_strain`` 0/1, ``critical_distance`` m or NaN) for the
+    meshio formats of :data:`MATERIAL_FORMATS`.
+
+    Returns
+    -------
+    bool
+        Whether the file holds the material (``False`` for a mesh without one, or a format
+        that cannot store it: give ``--material`` when reading such a file).
+    """
     from ..outputs import atomic_path, write_text_atomic
 
     path = Path(path)
     if path.suffix.lower() == ".json":
         write_text_atomic(path, json.dumps(mesh_to_dict(mesh)), "mesh")
-    else:
-        import meshio
+        return mesh.material is not None
+    import meshio
 
-        try:
-            with atomic_path(path) as tmp:
-                meshio.write_points_cells(tmp, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
-                                          [("triangle", mesh.triangles)])
-        except (Exception, SystemExit) as err:  # unknown suffix, unwritable path, ...
-            detail = " ".join(str(err).split())[:300]
-            raise MeshError(f"{path}: cannot write mesh file ({detail}); use .json or a "
-                            "suffix meshio knows (.vtk, .vtu, .msh, ...)") from None
+    keep = mesh.material is not None and path.suffix.lower() in MATERIAL_FORMATS
+    cell_data = _material_cell_data(mesh.material, len(mesh.triangles)) if keep else None
+    try:
+        with atomic_path(path) as tmp:
+            meshio.write_points_cells(tmp, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
+                                      [("triangle", mesh.triangles)], cell_data=cell_data)
+    except (Exception, SystemExit) as err:  # unknown suffix, unwritable path, ...
+        detail = " ".join(str(err).split())[:300]
+        raise MeshError(f"{path}: cannot write mesh file ({detail}); use .json or a "
+                        "suffix meshio knows (.vtk, .vtu, .msh, ...)") from None
+    return keep

@@ -15,12 +15,14 @@ back (``Q∞ ≤ 0``); otherwise ``"undecided"``: the release energy is within i
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..errors import GraspError
+from ..log import done
 from ..mesh import mesh_part
 from ..mesh.generate import default_max_area
 from .contact import PadContact, hole_containing
@@ -160,6 +162,9 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
                 raise GraspError("--expanding: the axis point is not inside a hole of the part; "
                                  "give --at points on a hole's boundary or an --axis point in it")
             holes["twin_hole"] = None if tw is None else hole_containing(tw.mesh, expanding_from)
+        t0 = time.perf_counter()
         levels.append(optimize_pads(m, axis, pad, twin=tw, **holes, **options))
         areas.append(area)
+        done("mesh %d of %d (%d nodes): Q* = %.6g J, %d grasp axes solved", t0,
+             k + 1, refine, m.n_nodes, levels[-1].quality, levels[-1].n_axes)
     return RefinedPadGrasp(levels, areas)
