@@ -104,6 +104,7 @@ class _PartModel(BaseModel):
     holes: list[list[list[float]]] = []
     material: _MaterialModel
     mesh: _MeshModel = _MeshModel()
+    provenance: dict | None = None      # written by `deformclosure import`; not read
 
     @field_validator("outer", mode="before")
     @classmethod
@@ -384,9 +385,13 @@ class Part:
 
     @classmethod
     def from_file(cls, path: str | Path) -> "Part":
-        """Read and validate a part file (JSON, SPEC §5)."""
+        """Read and validate a part file (JSON, SPEC §5), or a DXF/SVG drawing whose
+        material is in ``<name>.material.json`` beside it (:mod:`deformclosure.drawing`)."""
+        from .drawing import is_drawing_file, part_from_drawing
         from .jsonfile import read_json
 
+        if is_drawing_file(path):
+            return part_from_drawing(path)
         return cls.from_dict(read_json(path, PartError, "part file"))
 
     # ------------------------------------------------------------------ geometry

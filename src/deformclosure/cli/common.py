@@ -66,11 +66,15 @@ def read_part(path: str | Path, units: str | None = None, material: str | None =
     default the part's), and print its unit-sanity warnings."""
     import dataclasses
 
+    from ..drawing import is_drawing_file, part_from_drawing
     from ..part import read_material
 
-    part = Part.from_file(path)
-    if material is not None:
-        part = dataclasses.replace(part, material=read_material(material, units or part.units))
+    if is_drawing_file(path):
+        part = part_from_drawing(path, material=material, default_units=units)
+    else:
+        part = Part.from_file(path)
+        if material is not None:
+            part = dataclasses.replace(part, material=read_material(material, units or part.units))
     warn_part(part)
     return part
 

@@ -19,6 +19,7 @@ EPILOG = """\b
 Examples:
   deformclosure demo
   deformclosure mesh examples/rectangle.json -o mesh.json --plot mesh.png
+  deformclosure import drawing.dxf --material examples/rectangle.json -o part.json
   deformclosure optimize examples/rectangle.json --at 0,10 12,10 -o report.json --plot out/
   deformclosure check examples/l_shape.json --fingers examples/fingers/l_shape.json
   deformclosure plan examples/rectangle.json --top 10 -o plan.json --plot plan/
@@ -37,13 +38,13 @@ def cli() -> None:
 
 
 def _register() -> None:
-    from . import batch, check, demo, mesh_cmd, optimize, plan, results, slice
+    from . import batch, check, demo, import_cmd, mesh_cmd, optimize, plan, results, slice
 
     from .common import with_verbosity
 
-    for name, module in (("demo", demo), ("mesh", mesh_cmd), ("check", check),
-                         ("slice", slice), ("optimize", optimize), ("plan", plan),
-                         ("batch", batch), ("results", results)):
+    for name, module in (("demo", demo), ("import", import_cmd), ("mesh", mesh_cmd),
+                         ("check", check), ("slice", slice), ("optimize", optimize),
+                         ("plan", plan), ("batch", batch), ("results", results)):
         # `results` prints its table on stdout as its product: --quiet keeps it.
         cli.add_command(with_verbosity(module.command, keep_stdout=name == "results"), name)
 

@@ -140,7 +140,11 @@ def mesh_from_dict(data: Any) -> Mesh:
 
 def is_mesh_file(path: str | Path) -> bool:
     """True if ``path`` is a mesh (mesh JSON or a meshio format), not a part file."""
+    from ..drawing import is_drawing_file
+
     path = Path(path)
+    if is_drawing_file(path):
+        return False
     if path.suffix.lower() != ".json":
         return True
     from ..jsonfile import read_json

@@ -1,0 +1,623 @@
+"""Parts from CAD drawings: DXF (ezdxf) and SVG (svgelements).
+
+A drawing gives the part's outline; every curve is flattened to a polyline whose chords
+stay within ``tolerance`` of it. Open pieces (LINE, ARC, open polylines and splines, SVG
+sub-paths) are chained end to end into closed loops; the loop of largest area is the
+outer ring and every other loop must lie inside it (a hole). Problems — an open chain,
+a branch, a self-intersecting loop, a loop outside the outer one — are reported on one
+line naming the entity (DXF handle and type) or the SVG element id.
+
+Units: a DXF file's ``$INSUNITS`` header, an SVG file's physical ``width``/``height``
+(CSS: 96 px per inch, so plain user units are CSS pixels); ``units=`` overrides both
+(one drawing unit, or one SVG user unit, is then one ``units``).
+
+A drawing holds no material: it comes from the caller, or from a small JSON file beside
+the drawing, ``<name>.material.json`` (a material object, optionally with ``units`` and
+a ``mesh`` block of part-file mesh options).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+
+from .errors import PartError
+from .units import LENGTH_UNITS
+
+__all__ = ["DRAWING_SUFFIXES", "Drawing", "read_drawing", "part_from_drawing",
+           "is_drawing_file"]
+
+#: File suffixes read as drawings.
+DRAWING_SUFFIXES = (".dxf", ".svg")
+
+# DXF $INSUNITS codes we accept: the unit and the factor to it (feet → inches, µm → mm).
+_DXF_UNITS = {1: ("in", 1.0), 2: ("in", 12.0), 4: ("mm", 1.0), 5: ("cm", 1.0), 6: ("m", 1.0),
+              7: ("m", 1e3), 8: ("in", 1e-6), 9: ("in", 1e-3), 10: ("in", 36.0),
+              13: ("mm", 1e-3), 14: ("mm", 100.0)}
+_DXF_NAMES = {0: "unitless", 3: "miles", 11: "ångström",
+              12: "nanometres", 15: "decametres", 16: "hectometres", 17: "gigametres",
+              18: "astronomical units", 19: "light years", 20: "parsecs"}
+
+#: Entities that carry no outline (annotations): skipped without a word.
+_ANNOTATIONS = {"TEXT", "MTEXT", "DIMENSION", "LEADER", "MLEADER", "POINT", "HATCH", "SOLID",
+                "ATTDEF", "ATTRIB", "VIEWPORT", "IMAGE", "WIPEOUT", "TOLERANCE", "XLINE", "RAY"}
+_CURVES = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"}
+
+#: Most vertices a flattened drawing may have (beyond it the chord tolerance is too fine).
+MAX_VERTICES = 2_000_000
+
+
+@dataclass(frozen=True)
+class Drawing:
+    """Closed loops of a drawing, in its units.
+
+    Attributes
+    ----------
+    outer : ndarray, shape (n, 2)
+        The outer ring (not closed).
+    holes : tuple of ndarray
+        The rings inside it.
+    units : str
+        Unit of the coordinates (one of ``m``, ``cm``, ``mm``, ``in``).
+    """
+
+    outer: np.ndarray
+    holes: tuple[np.ndarray, ...]
+    units: str
+
+
+@dataclass
+class _Piece:
+    points: np.ndarray          # (k, 2), k >= 2
+    closed: bool
+    name: str                   # "LINE #2F" / "path 'slot'"
+
+
+def is_drawing_file(path: str | Path) -> bool:
+    """Whether ``path`` is read as a drawing (by its suffix)."""
+    return Path(path).suffix.lower() in DRAWING_SUFFIXES
+
+
+def read_drawing(path: str | Path, units: str | None = None, layer: str | None = None,
+                 tolerance: float | None = None, default_units: str | None = None) -> Drawing:
+    """Closed loops of a DXF or SVG drawing.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.dxf`` or ``.svg`` file.
+    units : str, optional
+        Unit of the drawing's coordinates, overriding its header.
+    layer : str, optional
+        DXF: read only this layer (SVG: only elements inside the group of this id).
+    tolerance : float, optional
+        Largest distance between a curve and its chords, in the drawing's units
+        (default 0.1 % of the drawing's bounding-box diagonal).
+    default_units : str, optional
+        Unit of a DXF drawing whose header states none (``units`` overrides the header).
+
+    Raises
+    ------
+    PartError
+        One line naming the entity or element and what is wrong.
+    """
+    from .jsonfile import check_input_file
+
+    path = Path(path)
+    check_input_file(path, PartError, "drawing")
+    for given in (units, default_units):
+        if given is not None and given not in LENGTH_UNITS:
+            raise PartError(f"--units = {given!r}: unknown length unit; use one of "
+                            f"{', '.join(LENGTH_UNITS)}")
+    if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
+        raise PartError(f"--tolerance = {tolerance!r}: must be a finite length > 0 in the "
+                        "drawing's units")
+    suffix = path.suffix.lower()
+    if suffix == ".dxf":
+        pieces, unit, scale = _dxf_pieces(path, units, layer, tolerance, default_units)
+    elif suffix == ".svg":
+        pieces, unit, scale = _svg_pieces(path, units, layer, tolerance)
+    else:
+        raise PartError(f"{path}: not a drawing; give a .dxf or .svg file")
+    if not pieces:
+        where = f" on layer {layer!r}" if layer is not None else ""
+        raise PartError(f"{path}: no lines, arcs, polylines, circles, ellipses or splines"
+                        f"{where}; draw the part's outline")
+    loops = _chain(pieces, path)
+    loops = [(pts * scale, name) for pts, name in loops]
+    return _assemble(loops, unit, path)
+
+
+# --------------------------------------------------------------------------- DXF
+def _dxf_pieces(path: Path, units: str | None, layer: str | None, tolerance: float | None,
+                default_units: str | None) -> tuple[list[_Piece], str, float]:
+    import ezdxf
+
+    try:
+        doc = ezdxf.readfile(str(path))
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as err:
+        detail = " ".join(str(err).split())[:200]
+        raise PartError(f"{path}: not a readable DXF file ({detail})") from None
+    msp = doc.modelspace()
+    entities = []
+    for e in msp:
+        entities.extend(_expand(e))
+    if layer is not None:
+        layers = sorted({e.dxf.layer for e in entities})
+        entities = [e for e in entities if e.dxf.layer == layer]
+        if not entities:
+            raise PartError(f"--layer {layer!r}: no entities on it; layers in the drawing: "
+                            f"{', '.join(layers) or 'none'}")
+    curves = []
+    for e in entities:
+        kind = e.dxftype()
+        if kind in _ANNOTATIONS:
+            continue
+        if kind not in _CURVES:
+            raise PartError(f"{path}: {kind} #{e.dxf.handle} is not supported; draw the outline "
+                            "with lines, arcs, polylines, circles, ellipses or splines")
+        curves.append(e)
+    if len(curves) > MAX_VERTICES // 2:
+        raise PartError(f"{path}: {len(curves)} entities, more than {MAX_VERTICES // 2}")
+    default = tolerance is None
+    if default:
+        tolerance = 1e-3 * _dxf_diagonal(curves)
+    pieces = []
+    total = 0
+    for e in curves:
+        name = f"{e.dxftype()} #{e.dxf.handle}"
+        try:
+            pts, closed = _dxf_flatten(e, min(tolerance, _own_tolerance(e)) if default
+                                       else tolerance, 1e-2 if default else math.inf)
+        except Exception as err:  # noqa: BLE001 - ezdxf raises many types for bad geometry
+            raise PartError(f"{path}: {name} cannot be flattened ({err}); fix or redraw it") from None
+        if e.dxftype() in ("LWPOLYLINE", "POLYLINE") and _dxf_elevated(e):
+            raise PartError(f"{path}: {name} is not in the XY plane; the part must be planar")
+        total += len(pts)
+        if total > MAX_VERTICES:
+            raise PartError(f"{path}: flattening gives more than {MAX_VERTICES} vertices; "
+                            "give a larger --tolerance")
+        if len(pts) < 2 or not np.all(np.isfinite(pts)):
+            raise PartError(f"{path}: {name} is degenerate (no length or non-finite "
+                            "coordinates); delete it")
+        pieces.append(_Piece(pts, closed, name))
+    header = doc.header.get("$INSUNITS", 0)
+    if units is not None:
+        return pieces, units, 1.0
+    if header in _DXF_UNITS:
+        unit, factor = _DXF_UNITS[header]
+        return pieces, unit, factor
+    if default_units is not None:
+        return pieces, default_units, 1.0
+    what = _DXF_NAMES.get(header, f"code {header}")
+    raise PartError(f"{path}: the drawing's units are {what} ($INSUNITS); give --units "
+                    "(m, cm, mm or in) for its coordinates")
+
+
+def _own_tolerance(e) -> float:
+    """1 % of a curve's own size (radius, minor semi-axis): the default tolerance never
+    turns a small hole into a triangle."""
+    kind = e.dxftype()
+    if kind in ("ARC", "CIRCLE"):
+        return 1e-2 * float(e.dxf.radius)
+    if kind == "ELLIPSE":
+        return 1e-2 * float(e.dxf.major_axis.magnitude) * float(e.dxf.ratio)
+    if kind == "SPLINE":
+        from ezdxf import bbox
+
+        box = bbox.extents([e], fast=True)
+        return 1e-2 * float(math.hypot(box.size.x, box.size.y)) if box.has_data else math.inf
+    return math.inf
+
+
+def _arc_points(cx: float, cy: float, r: float, a0: float, a1: float, tol: float) -> np.ndarray:
+    """Points on the arc from angle ``a0`` to ``a1`` (rad, a1 > a0), both ends included,
+    with chords whose sagitta ``r (1 − cos(Δ/2))`` is at most ``tol``."""
+    step = 2 * math.acos(max(-1.0, 1.0 - tol / r)) if tol < 2 * r else math.pi
+    n = max(1, math.ceil((a1 - a0) / max(step, 1e-9)))
+    t = np.linspace(a0, a1, n + 1)
+    return np.column_stack([cx + r * np.cos(t), cy + r * np.sin(t)])
+
+
+def _is_planar_xy(e) -> bool:
+    """Whether an arc or circle lies in the XY plane, drawn counter-clockwise seen from +z."""
+    n = e.dxf.extrusion
+    return abs(n.x) < 1e-12 and abs(n.y) < 1e-12 and n.z > 0
+
+
+def _dxf_flatten(e, tol: float, rel: float = math.inf) -> tuple[np.ndarray, bool]:
+    """Vertices of a curve entity, chords within ``tol`` of it, and whether it is closed.
+
+    Arcs (ARC, CIRCLE, polyline bulges) and ellipses are sampled on the exact curve, splines
+    on the exact NURBS (ezdxf's generic paths would approximate arcs by Bézier curves,
+    ~3e-4 r off, more than a fine tolerance). ``rel``: bulge arcs use at most ``rel × r``.
+    """
+    from ezdxf.math import bulge_to_arc
+
+    kind = e.dxftype()
+    if kind == "LINE":
+        return np.array([[e.dxf.start.x, e.dxf.start.y], [e.dxf.end.x, e.dxf.end.y]]), False
+    if kind in ("CIRCLE", "ARC") and _is_planar_xy(e):
+        c, r = e.dxf.center, float(e.dxf.radius)
+        if kind == "CIRCLE":
+            return _arc_points(c.x, c.y, r, 0.0, 2 * math.pi, tol)[:-1], True
+        a0 = math.radians(e.dxf.start_angle)
+        a1 = math.radians(e.dxf.end_angle)
+        a1 = a1 if a1 > a0 else a1 + 2 * math.pi
+        return _arc_points(c.x, c.y, r, a0, a1, tol), False
+    if kind in ("ARC", "ELLIPSE", "SPLINE", "CIRCLE"):
+        pts = np.array([(v.x, v.y) for v in e.flattening(tol)], float)
+        closed = kind == "ELLIPSE" and abs(abs(e.dxf.end_param - e.dxf.start_param)
+                                           - 2 * math.pi) < 1e-12 or \
+            (kind == "SPLINE" and bool(e.closed))
+        if len(pts) > 2 and np.allclose(pts[0], pts[-1], rtol=0, atol=1e-12 * (tol + 1)):
+            pts, closed = pts[:-1], True
+        return pts, closed
+    # LWPOLYLINE / 2-D POLYLINE: vertices with bulges (tan of a quarter of the arc angle)
+    if kind == "LWPOLYLINE":
+        verts = [(x, y, b) for x, y, b in e.get_points(format="xyb")]
+        closed = bool(e.closed)
+    else:
+        if e.get_mode() != "AcDb2dPolyline":
+            raise ValueError("only 2-D polylines are supported")
+        verts = [(v.dxf.location.x, v.dxf.location.y, v.dxf.bulge) for v in e.vertices]
+        closed = bool(e.is_closed)
+    out = []
+    n = len(verts)
+    for i in range(n if closed else n - 1):
+        x0, y0, b = verts[i]
+        x1, y1, _ = verts[(i + 1) % n]
+        out.append((x0, y0))
+        if b:
+            c, a0, a1, r = bulge_to_arc((x0, y0), (x1, y1), b)
+            a1 = a1 if a1 > a0 else a1 + 2 * math.pi
+            inner = _arc_points(c.x, c.y, r, a0, a1, min(tol, rel * r))[1:-1]
+            out.extend(inner if b > 0 else inner[::-1])
+    if not closed:
+        out.append(verts[-1][:2])
+    return np.array(out, float), closed
+
+
+def _expand(entity) -> Iterable[Any]:
+    """Block references exploded into their entities (recursively); others as they are.
+    An entity on layer "0" inside a block takes the reference's layer (DXF convention)."""
+    if entity.dxftype() == "INSERT":
+        for sub in entity.virtual_entities():
+            if sub.dxf.layer == "0":
+                sub.dxf.layer = entity.dxf.layer
+            yield from _expand(sub)
+    else:
+        yield entity
+
+
+def _dxf_elevated(e) -> bool:
+    try:
+        return abs(float(e.dxf.elevation if e.dxftype() == "LWPOLYLINE"
+                         else e.dxf.elevation.z)) > 0
+    except (AttributeError, TypeError):
+        return False
+
+
+def _dxf_diagonal(curves) -> float:
+    """Diagonal of a box holding every curve, from its defining points (end points,
+    centre ± radius, control points — a spline lies in their convex hull): cheap, and
+    never smaller than the drawing's own box."""
+    pts = []
+    for e in curves:
+        kind = e.dxftype()
+        if kind == "LINE":
+            pts += [(e.dxf.start.x, e.dxf.start.y), (e.dxf.end.x, e.dxf.end.y)]
+        elif kind in ("ARC", "CIRCLE"):
+            c, r = e.dxf.center, float(e.dxf.radius)
+            pts += [(c.x - r, c.y - r), (c.x + r, c.y + r)]
+        elif kind == "ELLIPSE":
+            c, a = e.dxf.center, float(e.dxf.major_axis.magnitude)
+            pts += [(c.x - a, c.y - a), (c.x + a, c.y + a)]
+        elif kind == "SPLINE":
+            pts += [(p[0], p[1]) for p in e.control_points] + [(p[0], p[1]) for p in e.fit_points]
+        elif kind == "LWPOLYLINE":
+            pts += [(x, y) for x, y in e.get_points(format="xy")]
+        else:
+            pts += [(v.dxf.location.x, v.dxf.location.y) for v in e.vertices]
+    if not pts:
+        return 1.0
+    arr = np.asarray(pts, float)
+    d = float(np.hypot(*np.ptp(arr, axis=0)))
+    return d if math.isfinite(d) and d > 0 else 1.0
+
+
+# --------------------------------------------------------------------------- SVG
+_SVG_PHYSICAL = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6}
+
+
+def _svg_pieces(path: Path, units: str | None, layer: str | None,
+                tolerance: float | None) -> tuple[list[_Piece], str, float]:
+    import svgelements as se
+
+    try:
+        svg = se.SVG.parse(str(path), reify=True, ppi=96.0)
+    except Exception as err:  # noqa: BLE001 - the XML parser and svgelements raise many types
+        detail = " ".join(str(err).split())[:200]
+        raise PartError(f"{path}: not a readable SVG file ({detail})") from None
+    root = svg
+    if layer is not None:
+        found = svg.get_element_by_id(layer)
+        if found is None:
+            raise PartError(f"--layer {layer!r}: no SVG element with this id")
+        root = found
+    shapes = [e for e in root.select() if isinstance(e, se.Shape)]
+    # Scale from the parsed coordinates (CSS px at 96 ppi, after the viewBox) to the unit.
+    px_per_user = _svg_px_per_user(svg)
+    if units is not None:
+        unit, scale = units, 1.0 / px_per_user
+    else:
+        unit, scale = "mm", 25.4 / 96.0
+    pieces: list[_Piece] = []
+    polylines = []
+    for i, shape in enumerate(shapes):
+        name = f"{type(shape).__name__.lower()} {shape.id!r}" if shape.id else \
+            f"{type(shape).__name__.lower()} #{i + 1}"
+        p = se.Path(shape)
+        if len(p) == 0:
+            continue
+        polylines.append((name, p))
+    if not polylines:
+        return [], unit, scale
+    if tolerance is None:
+        boxes = np.array([p.bbox() for _, p in polylines if p.bbox() is not None], float)
+        diag = math.hypot(boxes[:, 2].max() - boxes[:, 0].min(), boxes[:, 3].max() - boxes[:, 1].min())
+        tol_px = 1e-3 * (diag if diag > 0 else 1.0)
+    else:
+        tol_px = tolerance / scale
+    total = 0
+    for name, p in polylines:
+        for k, sub in enumerate(p.as_subpaths()):
+            sub = se.Path(sub)
+            pts, closed = _flatten_svg(sub, tol_px)
+            if len(pts) < 2:
+                continue
+            total += len(pts)
+            if total > MAX_VERTICES:
+                raise PartError(f"{path}: flattening gives more than {MAX_VERTICES} vertices; "
+                                "give a larger --tolerance")
+            if not np.all(np.isfinite(pts)):
+                raise PartError(f"{path}: {name} has non-finite coordinates; fix it")
+            label = name if k == 0 else f"{name} (sub-path {k + 1})"
+            # SVG's y axis points down: mirror it so that loops keep their orientation sense.
+            pts = pts * np.array([1.0, -1.0])
+            pieces.append(_Piece(pts, closed, label))
+    return pieces, unit, scale
+
+
+def _svg_px_per_user(svg) -> float:
+    """CSS pixels per SVG user unit (from the root's width and viewBox; 1 without)."""
+    vb = getattr(svg, "viewbox", None)
+    if vb is None or not getattr(vb, "width", None):
+        return 1.0
+    return float(svg.width) / float(vb.width) if svg.width else 1.0
+
+
+def _flatten_svg(path, tol: float) -> tuple[np.ndarray, bool]:
+    """Vertices of one SVG sub-path with chords within ``tol`` (px) of the curves."""
+    import svgelements as se
+
+    pts: list[complex] = []
+    closed = False
+    for seg in path:
+        if isinstance(seg, se.Move):
+            pts.append(_z(seg.end))
+        elif isinstance(seg, se.Close):
+            closed = True
+        elif isinstance(seg, se.Line):
+            pts.append(_z(seg.end))
+        else:      # Arc, CubicBezier, QuadraticBezier: adaptive subdivision
+            pts.extend(_subdivide(seg, 0.0, 1.0, _z(seg.start), _z(seg.end), tol, 0))
+    arr = np.array([[z.real, z.imag] for z in pts], float)
+    if len(arr) > 2 and np.allclose(arr[0], arr[-1], rtol=0, atol=tol * 1e-3):
+        arr = arr[:-1]
+        closed = True
+    return arr, closed
+
+
+def _z(point) -> complex:
+    """An svgelements point as a Python complex number."""
+    return complex(float(point.x), float(point.y))
+
+
+def _subdivide(seg, t0: float, t1: float, p0: complex, p1: complex, tol: float,
+               depth: int) -> list[complex]:
+    """Points (after ``p0``, ending with ``p1``) of ``seg`` on [t0, t1] within ``tol``."""
+    tm = 0.5 * (t0 + t1)
+    pm = _z(seg.point(tm))
+    q1, q3 = _z(seg.point(0.5 * (t0 + tm))), _z(seg.point(0.5 * (tm + t1)))
+    chord = p1 - p0
+    L = abs(chord)
+
+    def dev(q: complex) -> float:
+        if L == 0:
+            return abs(q - p0)
+        return abs(((q - p0) * chord.conjugate()).imag) / L
+
+    if depth >= 18 or (depth >= 2 and max(dev(pm), dev(q1), dev(q3)) <= tol):
+        return [p1]
+    return (_subdivide(seg, t0, tm, p0, pm, tol, depth + 1)
+            + _subdivide(seg, tm, t1, pm, p1, tol, depth + 1))
+
+
+# --------------------------------------------------------------------------- loops
+def _chain(pieces: list[_Piece], path: Path) -> list[tuple[np.ndarray, str]]:
+    """Closed loops: closed pieces as they are, open pieces joined end to end (end points
+    within 1e-6 of the drawing's span of each other are the same point)."""
+    loops = [(p.points, p.name) for p in pieces if p.closed]
+    open_ = [p for p in pieces if not p.closed]
+    if not open_:
+        return loops
+    lo = np.min([p.points.min(axis=0) for p in open_], axis=0)
+    hi = np.max([p.points.max(axis=0) for p in open_], axis=0)
+    snap = 1e-6 * (float(np.max(hi - lo)) or 1.0)
+    ends = [(tuple(p.points[0]), tuple(p.points[-1])) for p in open_]
+    cells: dict[tuple[int, int], list[tuple[int, int]]] = {}   # grid cell -> (piece, end)
+
+    def cell(pt) -> tuple[int, int]:
+        return (math.floor(pt[0] / snap), math.floor(pt[1] / snap))
+
+    def same(a, b) -> bool:
+        return math.hypot(a[0] - b[0], a[1] - b[1]) <= snap
+
+    used = [False] * len(open_)
+    for i, (a, b) in enumerate(ends):
+        if same(a, b) and len(open_[i].points) > 2:
+            loops.append((open_[i].points[:-1], open_[i].name))
+            used[i] = True
+            continue
+        for end, pt in enumerate((a, b)):
+            cells.setdefault(cell(pt), []).append((i, end))
+
+    def near(pt) -> list[tuple[int, int]]:
+        cx, cy = cell(pt)
+        return [m for dx in (-1, 0, 1) for dy in (-1, 0, 1) for m in cells.get((cx + dx, cy + dy), ())
+                if not used[m[0]] and same(ends[m[0]][m[1]], pt)]
+
+    for i in range(len(open_)):
+        if used[i]:
+            continue
+        used[i] = True
+        chain = [open_[i].points]
+        names = [open_[i].name]
+        start, tip = ends[i]
+        while not same(tip, start):
+            nxt = near(tip)
+            if not nxt:
+                raise PartError(f"{path}: open outline: {names[-1]} ends at "
+                                f"({tip[0]:.6g}, {tip[1]:.6g}) and nothing continues it; "
+                                "close the outline")
+            if len(nxt) > 1:
+                others = ", ".join(open_[j].name for j, _ in nxt)
+                raise PartError(f"{path}: the outline branches at ({tip[0]:.6g}, {tip[1]:.6g}) "
+                                f"after {names[-1]} ({others}); remove the extra entity")
+            j, end = nxt[0]
+            used[j] = True
+            pts = open_[j].points if end == 0 else open_[j].points[::-1]
+            chain.append(pts[1:])
+            names.append(open_[j].name)
+            tip = ends[j][1 - end]
+        loop = np.concatenate(chain)[:-1]
+        loops.append((loop, names[0] if len(names) == 1 else f"{names[0]} … {names[-1]}"))
+    return loops
+
+
+def _assemble(loops: list[tuple[np.ndarray, str]], unit: str, path: Path) -> Drawing:
+    import shapely
+
+    rings = []
+    for pts, name in loops:
+        pts = _dedupe(pts)
+        if len(pts) < 3:
+            raise PartError(f"{path}: {name} closes with fewer than 3 distinct points; delete it")
+        ring = shapely.LinearRing(pts)
+        if not ring.is_simple:
+            raise PartError(f"{path}: {name} crosses itself; redraw it without a "
+                            "self-intersection")
+        area = abs(shapely.Polygon(pts).area)
+        if area <= 0:
+            raise PartError(f"{path}: {name} encloses no area; delete it")
+        rings.append((area, pts, name))
+    rings.sort(key=lambda r: -r[0])
+    _, outer, outer_name = rings[0]
+    shell = shapely.Polygon(outer)
+    shapely.prepare(shell)
+    holes = []
+    for _, pts, name in rings[1:]:
+        poly = shapely.Polygon(pts)
+        if not shell.contains(poly):
+            if shell.intersects(poly):
+                raise PartError(f"{path}: {name} crosses the outer outline {outer_name}; "
+                                "fix the drawing")
+            raise PartError(f"{path}: two outer outlines, {outer_name} and {name}; a part is "
+                            "one piece: delete one, or choose one with --layer")
+        holes.append(pts)
+    return Drawing(outer, tuple(holes), unit)
+
+
+def _dedupe(pts: np.ndarray) -> np.ndarray:
+    """Consecutive repeated vertices removed (a loop is not closed in the array)."""
+    if len(pts) == 0:
+        return pts
+    span = float(np.ptp(pts, axis=0).max()) or 1.0
+    keep = np.ones(len(pts), bool)
+    keep[1:] = np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-12 * span
+    pts = pts[keep]
+    if len(pts) > 1 and np.linalg.norm(pts[0] - pts[-1]) <= 1e-12 * span:
+        pts = pts[:-1]
+    return pts
+
+
+# --------------------------------------------------------------------------- parts
+def part_from_drawing(path: str | Path, material=None, units: str | None = None,
+                      layer: str | None = None, tolerance: float | None = None,
+                      mesh: dict | None = None, name: str | None = None,
+                      default_units: str | None = None):
+    """A :class:`~deformclosure.part.Part` from a drawing.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.dxf`` or ``.svg``.
+    material : Material or str, optional
+        A material, or the text of ``--material`` (inline JSON or a JSON file; lengths in
+        the drawing's units unless it states its own). Default: from
+        ``<name>.material.json`` beside the drawing.
+    units, layer, tolerance, default_units
+        See :func:`read_drawing`.
+    mesh : dict, optional
+        Part-file mesh options (``max_area`` in units², ``min_angle``, ``points``); default
+        from the material file beside the drawing, if it has a ``mesh`` block.
+    name : str, optional
+        Default: the file's stem.
+
+    Raises
+    ------
+    PartError
+    """
+    from .part import Part, read_material
+    from .units import length_scale
+
+    path = Path(path)
+    drawing = read_drawing(path, units, layer, tolerance, default_units)
+    if isinstance(material, str):
+        material = read_material(material, drawing.units)
+    side = path.with_name(path.stem + ".material.json")
+    if material is None or mesh is None:
+        if side.exists():
+            from .jsonfile import read_json
+
+            data = read_json(side, PartError, "material file")
+            if isinstance(data, dict) and mesh is None and isinstance(data.get("mesh"), dict):
+                mesh = data["mesh"]
+            if material is None:
+                blob = {k: v for k, v in data.items() if k != "mesh"} \
+                    if isinstance(data, dict) else data
+                import json
+
+                material = read_material(json.dumps(blob), drawing.units, str(side))
+        elif material is None:
+            raise PartError(f"{path}: a drawing has no material; give --material FILE|JSON or "
+                            f"put it in {side.name} beside the drawing")
+    scale = length_scale(drawing.units)
+    mat = material.to_dict()
+    mat["thickness"] = material.thickness / scale
+    if material.critical_distance is not None:
+        mat["critical_distance"] = material.critical_distance / scale
+    data = {"name": name or path.stem, "units": drawing.units,
+            "outer": drawing.outer.tolist(), "holes": [h.tolist() for h in drawing.holes],
+            "material": mat}
+    if mesh is not None:
+        data["mesh"] = mesh
+    part = Part.from_dict(data)
+    import dataclasses
+
+    return dataclasses.replace(part, material=material)
