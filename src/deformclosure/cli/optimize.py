@@ -101,17 +101,26 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None,
 @click.option("--plot", type=click.Path(file_okay=False), help="Folder for the plots.")
 @click.option("--export-graph", type=click.Path(dir_okay=False),
               help="paper model: write the contact graph (JSON).")
+@click.option("--export-fields", type=click.Path(dir_okay=False), default=None,
+              help="Write the fields at σ* to FILE.vtu (and at σ_L to FILE_sigma_L.vtu) for "
+                   "ParaView: deformed mesh, displacement, strain, contact pressure.")
 @click.option("--quiet", is_flag=True, help="No progress output.")
 def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets,
             method, eps, expanding, jaw_width, material, units, output, plot, export_graph,
-            quiet) -> int:
+            export_fields, quiet) -> int:
     """Optimal separation σ* maximising Q = min(U_A, U_L) for one grasp."""
-    check_outputs([output, export_graph], [plot], [part])
+    from ..fields import check_field_path, field_paths
+
+    if export_fields is not None:
+        check_field_path(export_fields)
+    check_outputs([output, export_graph,
+                   *(field_paths(export_fields, ["sigma_star", "sigma_L"]) if export_fields else [])],
+                  [plot], [part])
     if model is None:
         model = "paper" if jaws is not None else "pads"
     if model == "paper":
         return _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, output,
-                      plot, export_graph)
+                      plot, export_graph, export_fields)
     bad = [name for name, given in (("--jaws", jaws is not None),
                                     ("--jaw-width", jaw_width != 0.0), ("--eps", eps is not None),
                                     ("--export-graph", export_graph is not None),
@@ -120,7 +129,7 @@ def command(part, model, jaws, at, axis, pad_radius, pad_width, refine, grid_ang
         raise GraspError(f"{bad[0]}: belongs to the paper model; add --model paper, or give the "
                          "pads an axis with --at X,Y X,Y or --axis X,Y,DEG")
     return _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-                 material, output, plot, quiet, expanding)
+                 material, output, plot, quiet, expanding, export_fields)
 
 
 def parse_axis(at, axis, scale: float):
@@ -143,7 +152,7 @@ def parse_axis(at, axis, scale: float):
 
 
 def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offsets, units,
-          material, output, plot, quiet, expanding=False) -> int:
+          material, output, plot, quiet, expanding=False, export_fields=None) -> int:
     from ..pads import pad_grasp
     from .common import check_grid, load_part_or_mesh, pad_from_options
 
@@ -193,6 +202,15 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
         click.echo(f"warning: {w}", err=True)
     click.echo(f"verdict: {report['verdict'].upper()}")
     write_json(report, output)
+    if export_fields:
+        from ..fields import write_fields
+
+        sigmas = ([("sigma_star", fine.sigma_star)] if fine.sigma_star is not None else []) \
+            + [("sigma_L", fine.sigma_L)]
+        states = [fine.state_at(sig, label) for label, sig in sigmas]
+        for pth in write_fields(export_fields, fine.solver.mesh, states,
+                                fine.limit.critical_distance):
+            click.echo(f"wrote {pth}")
     if plot:
         from ..plotting.pads import save_pad_plots
 
@@ -203,7 +221,7 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
 
 
 def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, output, plot,
-           export_graph) -> int:
+           export_graph, export_fields=None) -> int:
     """The paper's two-jaw model (SPEC §4), unchanged."""
     from ..grasp.analysis import grasp_model, optimize_separation
     if (jaws is None) == (at is None):
@@ -246,9 +264,38 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, o
     if export_graph:
         g = model.graph.to_dict(model.stiffness.sigma0, model.stiffness.k, pulls=model.pulls)
         write_text_atomic(export_graph, json.dumps(json_safe(g), allow_nan=False), "graph")
+    if export_fields:
+        from ..fields import write_fields
+        from ..pads.limit import critical_distance_of
+
+        sigmas = ([("sigma_star", ss)] if ss is not None else []) + \
+            [("sigma_L", res.limit.sigma_L)]
+        states = [paper_state(res, (n0, n1), sig, label) for label, sig in sigmas]
+        for pth in write_fields(export_fields, mesh, states, critical_distance_of(mesh)):
+            click.echo(f"wrote {pth}")
     if plot:
         from ..plotting.grasp import save_grasp_plots
 
         for pth in save_grasp_plots(res, plot, units=unit if unit != "m" else "mm"):
             click.echo(f"wrote {pth}")
     return 0
+
+
+def paper_state(res, jaws: tuple[int, int], sigma: float, label: str):
+    """The paper model's state at separation ``sigma`` (m): the linear displacement field
+    of the jaw pair for the squeeze ``|σ0 − σ|`` and the jaw forces ``k01 δ`` along the jaw
+    line (SPEC §4), as a :class:`deformclosure.fields.FieldState`."""
+    from ..fields import FieldState
+
+    lim = res.limit
+    mesh = res.model.mesh
+    delta = abs(lim.sigma0 - sigma)
+    sign = -1.0 if res.model.mode == "expanding" else 1.0
+    u = sign * lim.displacement_per_length * delta
+    a, b = jaws
+    d = mesh.nodes[b] - mesh.nodes[a]
+    d = d / np.linalg.norm(d)
+    forces = np.zeros((mesh.n_nodes, 2))
+    forces[a] = sign * lim.k01 * delta * d          # jaw a pushes towards b (contracting)
+    forces[b] = -forces[a]
+    return FieldState(label, u, forces)

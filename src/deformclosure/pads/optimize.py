@@ -81,6 +81,22 @@ class PadGraspResult:
     n_nodes: int = 0
     e_L: float | None = None
     warnings: tuple[str, ...] = ()
+    solver: PadContact | None = field(default=None, repr=False, compare=False)
+
+    def state_at(self, sigma: float, label: str):
+        """Displacement (m) and nodal contact forces (N) of the start axis at separation
+        ``sigma`` (m), as a :class:`deformclosure.fields.FieldState`."""
+        from ..fields import FieldState
+
+        solver, curve = self.solver, self.start_curve
+        n = solver.mesh.n_nodes
+        forces = np.zeros((n, 2))
+        if curve.path is None:
+            return FieldState(label, np.zeros(2 * n), forces)
+        lam = curve.path.multipliers(curve.delta(sigma))
+        np.add.at(forces, curve.nodes, lam[:, None] * curve.normals)
+        u = solver.displacement(solver.load_vector(curve, lam))
+        return FieldState(label, u, forces)
 
     @property
     def verdict(self) -> str:
@@ -268,7 +284,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=mesh.material.elastic_limit_strain,
-        warnings=_resolution_warnings(mesh, pad, hole))
+        warnings=_resolution_warnings(mesh, pad, hole), solver=solver)
 
 
 def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:
