@@ -14,9 +14,15 @@ Examples:
   deformclosure results results.sqlite --format json -o results.json
 
 \b
-The table and CSV show the key figures of each report (SI units: m, J); the JSON
-export holds every row with its full report.
+The table and CSV show the key figures of each report in SI units; CSV columns carry
+their unit (sigma_star_m, quality_J, seconds_s, jaw_a_x_m, ...), times are ISO 8601
+UTC (started_utc, finished_utc). The JSON export holds every row with its full report.
+A stored row that cannot be read (not JSON, NaN, too deep, not UTF-8) is listed with
+status "unreadable" and a warning on stderr.
 """
+
+#: Most warnings printed for unreadable rows.
+MAX_WARNINGS = 20
 
 
 @click.command(epilog=EPILOG)
@@ -34,7 +40,15 @@ def command(db, fmt, status, output) -> int:
     from ..planning.batch import format_results, read_results
 
     check_outputs([output], [], [db])
-    text = format_results(read_results(db, status=status), fmt)
+    rows = read_results(db, status=status)
+    bad = [r for r in rows if r["status"] == "unreadable"]
+    for r in bad[:MAX_WARNINGS]:
+        who = f"row {r['key'][:16] or '(no key)'}" + (f" ({r['part'][:80]})" if r["part"] else "")
+        click.echo(f"warning: {db}: {who} is unreadable: {r['error']}", err=True)
+    if len(bad) > MAX_WARNINGS:
+        click.echo(f"warning: {db}: ... and {len(bad) - MAX_WARNINGS} more unreadable rows",
+                   err=True)
+    text = format_results(rows, fmt)
     if output is None or output == "-":
         click.echo(text.rstrip("\n"))
         return 0
