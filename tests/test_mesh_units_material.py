@@ -173,3 +173,30 @@ def test_verbose_logs_the_steps_with_times(capsys):
 def test_quiet_and_verbose_together_is_an_error(capsys):
     assert main(["mesh", str(RECT), "-q", "-v"]) == 2
     assert "--quiet/--verbose" in capsys.readouterr().err
+
+
+def test_batch_jobs_on_imported_meshes_take_the_material(rect_mesh, tmp_path):
+    """A job list names a .obj mesh and a material file: the file is an input of the job
+    (hashed into its key, like --fingers); inline JSON is part of the options."""
+    from deformclosure.planning.batch import load_jobs, read_results, run_batch
+
+    write_mesh(rect_mesh, tmp_path / "m.obj")
+    (tmp_path / "rubber.json").write_text(json.dumps(RUBBER_MM))
+    common = ["--axis", "0.006,0.01,0", "--pad-radius", "0.002", "--grid-angles", "8",
+              "--grid-offsets", "8"]
+    (tmp_path / "jobs.json").write_text(json.dumps([
+        {"part": "m.obj", "command": "optimize", "options": [*common, "--material", "rubber.json"]},
+        {"part": "m.obj", "command": "optimize",
+         "options": [*common, "--material", json.dumps(RUBBER_MM)]}]))
+    jobs = load_jobs(tmp_path / "jobs.json")
+    assert [len(j.inputs) for j in jobs] == [1, 0]
+    run_batch(jobs, tmp_path / "r.sqlite", workers=1)
+    rows = read_results(tmp_path / "r.sqlite")
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    q = [json.loads(r["result"])["quality"] if isinstance(r["result"], str)
+         else r["result"]["quality"] for r in rows]
+    assert q[0] == pytest.approx(q[1], rel=1e-12)
+    # the material file is hashed: changing it changes the first job's key only
+    (tmp_path / "rubber.json").write_text(json.dumps({**RUBBER_MM, "youngs_modulus": 3e6}))
+    again = load_jobs(tmp_path / "jobs.json")
+    assert again[0].key != jobs[0].key and again[1].key == jobs[1].key
