@@ -200,3 +200,14 @@ def test_batch_jobs_on_imported_meshes_take_the_material(rect_mesh, tmp_path):
     (tmp_path / "rubber.json").write_text(json.dumps({**RUBBER_MM, "youngs_modulus": 3e6}))
     again = load_jobs(tmp_path / "jobs.json")
     assert again[0].key != jobs[0].key and again[1].key == jobs[1].key
+
+
+def test_results_to_stdout_with_dash(tmp_path, capsys):
+    from deformclosure.planning.batch import Job, run_batch
+
+    run_batch([Job.from_spec(EXAMPLES / "rectangle.json", "mesh")], tmp_path / "r.sqlite",
+              scheduler="inline", progress=False)
+    capsys.readouterr()
+    assert main(["results", str(tmp_path / "r.sqlite"), "--format", "json", "-o", "-"]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)[0]["status"] == "ok" and out.err == ""

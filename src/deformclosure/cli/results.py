@@ -50,7 +50,10 @@ def command(db, fmt, status, output) -> int:
                    err=True)
     text = format_results(rows, fmt)
     if output is None or output == "-":
-        click.echo(text.rstrip("\n"))
+        from . import common
+
+        # with -o - the CLI routes human text to stderr; the table is the product
+        click.echo(text.rstrip("\n"), file=common.REPORT_STDOUT if output == "-" else None)
         return 0
     try:
         with atomic_path(output) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
