@@ -4,6 +4,12 @@ The golden reports in ``tests/golden/`` were written by the code of commit d47a0
 last one before pads became the default) with the same commands; every key and every
 number must be identical now, except the wall-clock timings. The only additions allowed
 are the ``model`` key and the ``provenance`` block (version and input hashes).
+
+Documented changes since (each a fix whose reason is in the commit that made it):
+
+- ``paper_c_shape``: ``mesh.graph_edges`` 10615 → 10617 — swing arcs no longer register a
+  hit at the moving jaw's own node (issue 12): swing edges {1,5}–{1,3} and {1,5}–{1,65}
+  added, {1,5}–{1,167} now a slide edge only; σ*, Q, U_A, U_L unchanged.
 """
 
 from __future__ import annotations

@@ -548,6 +548,88 @@ def _swing_candidates(bd: _Boundary, ia: int, P: np.ndarray, D: np.ndarray,
     return bb[keep], ee[keep]
 
 
+def _circle_segment_roots(Pc: np.ndarray, Dc: np.ndarray, Lc: np.ndarray, L2: np.ndarray,
+                          r: np.ndarray, bpc: np.ndarray, b_is_p: np.ndarray,
+                          b_is_q: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where the swing circles meet boundary edges: edge parameters of the meeting points.
+
+    Candidate ``k`` is the circle of radius ``r[k]`` about the pivot ``a`` (coordinates
+    relative to ``a``) through the mover ``b`` (``bpc[k] = b - a``), and the edge
+    ``P + s D``, ``s`` in ``[0, 1]``.
+
+    Parameters
+    ----------
+    Pc, Dc : ndarray, shape (K, 2)
+        Edge start relative to the pivot, and edge vector (m).
+    Lc, L2 : ndarray, shape (K,)
+        Edge length (m) and its square (m²).
+    r : ndarray, shape (K,)
+        Circle radius ``|b - a|`` (m).
+    bpc : ndarray, shape (K, 2)
+        Mover relative to the pivot, ``b - a`` (m).
+    b_is_p, b_is_q : ndarray of bool, shape (K,)
+        The edge starts / ends at the mover ``b`` (an edge incident to the mover).
+    tol : float
+        Touching tolerance (m): a line within ``tol`` of tangency touches at its foot.
+
+    Returns
+    -------
+    s : ndarray, shape (K, 2)
+        Edge parameters of the two meeting points (dimensionless, not clipped).
+    ok : ndarray of bool, shape (K, 2)
+        Whether each meeting exists (range ``[0, 1]`` not yet checked).
+
+    Notes
+    -----
+    ``|P + s D|² = r²`` is ``L² s² + 2 β s + C = 0`` with ``β = P·D``,
+    ``C = |P|² - r²`` and discriminant ``β² - L² C = L² (r² - h²)`` (Lagrange's
+    identity; ``h = |P × D| / L`` is the distance from ``a`` to the edge's line).
+
+    *Tangency.* A line within ``tol`` of tangency (``|r - h| <= tol``) touches the
+    circle at its foot ``s = -β / L²`` (one double root). Near tangency the two roots
+    are ill-conditioned: a rounding error ``δ`` in ``r - h`` moves them by
+    ``√(2 r δ)``, e.g. 1e-10 m for ``δ`` = 1e-18 m, above the tolerance, so an exact
+    touch at a node (a symmetric part) would become a crossing of one of its edges.
+
+    *Crossings* (``r - h > tol``): the roots are taken in the numerically stable form
+    ``q = -(β + sign(β) √disc)``, ``s = q / L²`` and ``s = C / q`` (their product is
+    ``C / L²``), so neither suffers cancellation between ``β`` and ``√disc``.
+
+    *Edges incident to the mover* are met by the circle at ``b`` itself, where the jaw
+    starts, and at most once more: with ``P = b - a`` (``C = 0`` exactly) the roots are
+    ``0`` and ``-2 β / L²``, and symmetrically ``1`` and ``1 - 2 (b - a)·D / L²`` when
+    the edge ends at ``b``. Only that far root can be a meeting; it is computed from
+    ``b - a`` directly, without a square root. Solving the generic quadratic there
+    instead leaves a near-zero discriminant whenever the edge is tangent to the circle
+    at ``b`` (e.g. a face perpendicular to ``b - a``): its square root put a root at
+    ``b`` ~1e-8 rad past the start, above the tolerance, and that hit at the mover's
+    own node hid the true first meeting.
+    """
+    cr = Pc[:, 0] * Dc[:, 1] - Pc[:, 1] * Dc[:, 0]
+    h = np.abs(cr) / Lc
+    beta = Pc[:, 0] * Dc[:, 0] + Pc[:, 1] * Dc[:, 1]
+    sfoot = -beta / L2
+    disc = L2 * (r - h) * (r + h)  # factored: no cancellation in r² - h²
+    tangent = h - r >= -tol  # within tol of tangency: double root at the foot
+    q = -(beta + np.copysign(np.sqrt(np.clip(disc, 0.0, None)), beta))
+    nP = np.hypot(Pc[:, 0], Pc[:, 1])
+    C = (nP - r) * (nP + r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s1 = np.where(tangent, sfoot, q / L2)
+        # q = 0 only if β = 0 and disc = 0, a tangency already handled
+        s2 = np.where(tangent | (q == 0.0), s1, C / np.where(q == 0.0, 1.0, q))
+    s = np.stack([s1, s2], axis=1)
+    ok = np.repeat((h - r <= tol)[:, None], 2, axis=1)
+    # Edges incident to the mover: only the far root (see Notes).
+    far_p = -2.0 * beta / L2
+    far_q = 1.0 - 2.0 * (bpc[:, 0] * Dc[:, 0] + bpc[:, 1] * Dc[:, 1]) / L2
+    inc = b_is_p | b_is_q
+    s[:, 0] = np.where(b_is_p, far_p, np.where(b_is_q, far_q, s[:, 0]))
+    ok[inc, 0] = True
+    ok[inc, 1] = False
+    return s, ok
+
+
 def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
                    mover: int | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -561,7 +643,9 @@ def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
     ``dmin <= r <= dmax`` (distances from ``a`` to the edge, with a margin): with the
     movers sorted by radius, each edge's candidate movers are one contiguous range.
     The exact circle/segment intersections are then computed, vectorised, for batches
-    of (pivot, mover, edge) candidates from several pivots.
+    of (pivot, mover, edge) candidates from several pivots (:func:`_circle_segment_roots`:
+    stable quadratic roots, tangency within ``tol`` as one touch at the foot, and only
+    the far meeting on the mover's own edges).
     """
     X, vn, tol = bd.X, bd.vn, bd.tol
     m = len(vn)
@@ -600,19 +684,16 @@ def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
         Pc = P[ee] - pac
         Dc = D[ee]
         Lc = Ld[ee]
-        cr = Pc[:, 0] * Dc[:, 1] - Pc[:, 1] * Dc[:, 0]
-        h = np.abs(cr) / Lc  # distance from a to the edge's line
-        sfoot = -(Pc[:, 0] * Dc[:, 0] + Pc[:, 1] * Dc[:, 1]) / L2[ee]
-        # A line within tol of tangency counts as touching at the foot (double root).
-        touch = h - rr <= tol
-        w = np.sqrt(np.clip((rr - h) * (rr + h), 0.0, None)) / Lc
-        s = np.stack([sfoot - w, sfoot + w], axis=1)
-        eps = (tol / Lc)[:, None]
-        v_root = touch[:, None] & (s >= -eps) & (s <= 1.0 + eps)
-        s = np.clip(s, 0.0, 1.0)
-        Xr = Pc[:, None, :] + s[..., None] * Dc[:, None, :]
         sp_ = bd.seg_p[ee]
         sq_ = bd.seg_q[ee]
+        bpc = bpd[rows, bb]
+        mover = vn[bb]
+        s, v_root = _circle_segment_roots(Pc, Dc, Lc, L2[ee], rr, bpc, sp_ == mover,
+                                          sq_ == mover, tol)
+        eps = (tol / Lc)[:, None]
+        v_root &= (s >= -eps) & (s <= 1.0 + eps)
+        s = np.clip(s, 0.0, 1.0)
+        Xr = Pc[:, None, :] + s[..., None] * Dc[:, None, :]
         sl = s * Lc[:, None]
         node_r = np.where(sl <= tol, sp_[:, None],
                           np.where(Lc[:, None] - sl <= tol, sq_[:, None], -1))
@@ -623,10 +704,9 @@ def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
         Xh = np.concatenate([Xr, np.stack([Pc, Qc], axis=1)], axis=1)  # (K, 4, 2), rel. a
         valid = np.concatenate([v_root, v_end], axis=1)
         node = np.concatenate([node_r, np.stack([sp_, sq_], axis=1)], axis=1)
-        bpc = bpd[rows, bb]
-        # Ignore the start point b itself.
+        # Ignore the start point b itself (node b, and meetings within tol of it).
         near_b = np.hypot(Xh[..., 0] - bpc[:, None, 0], Xh[..., 1] - bpc[:, None, 1]) <= tol
-        valid &= ~near_b & (node != vn[bb][:, None])
+        valid &= ~near_b & (node != mover[:, None])
         dth = np.arctan2(Xh[..., 1], Xh[..., 0]) - thd[rows, bb][:, None]
 
         key = rows * m + bb
@@ -713,12 +793,15 @@ def contact_graph(nodes: np.ndarray, loops: Sequence[np.ndarray],
           direction whose first motion enters the part is skipped (interior angle at
           ``b``; a tangent along a boundary edge is decided by the arc's curvature,
           which bends towards ``a``). The first intersection of the arc with any
-          boundary edge of any loop (smallest positive arc angle, the start point ``b``
-          itself ignored) gives the edge's end nodes as ``c``. If that first meeting is
+          boundary edge of any loop (smallest positive arc angle; the start point ``b``
+          itself is ignored: ``b``'s own edges count only where the circle meets them
+          a second time) gives the edge's end nodes as ``c``. If that first meeting is
           within ``tol`` of a node ``c``, ``c`` and both its loop neighbours are
           targets; if several edges are met within ``tol`` of the first hit (along the
-          arc), or an edge is touched tangentially, the end nodes of every such edge
-          are. Targets must be vertex nodes other than ``a`` and ``b``.
+          arc), or an edge is touched tangentially (its line within ``tol`` of tangency
+          to the circle, crossing it or not: one touch at the foot of the
+          perpendicular from ``a``), the end nodes of every such edge are. Targets
+          must be vertex nodes other than ``a`` and ``b``.
 
     Raises
     ------
