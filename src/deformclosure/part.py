@@ -27,6 +27,7 @@ import shapely
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 from shapely.geometry import LinearRing, Polygon
 
+from . import limits as _limits
 from .errors import PartError
 from .units import LENGTH_UNITS, length_scale
 
@@ -39,8 +40,9 @@ __all__ = [
     "MAX_TRIANGLES",
 ]
 
-#: Largest number of triangles a mesh request may ask for (area / max_area).
-MAX_TRIANGLES = 4_000_000
+#: Largest number of triangles a mesh may have (see :mod:`deformclosure.limits`); a part
+#: file whose area / max_area alone exceeds it is refused on reading.
+MAX_TRIANGLES = _limits.MAX_TRIANGLES
 
 #: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
 #: it, areas overflow and the geometry checks are meaningless.
@@ -380,6 +382,10 @@ class Part:
         holes = tuple(_clean_ring(h, f"holes[{i}]") * scale for i, h in enumerate(model.holes))
         material = Material.from_dict(data["material"], scale)
         outer, holes = _validate_geometry(outer, holes)
+        from .geometry import point_set_diameter
+
+        _limits.check_ring_gaps(outer, holes, point_set_diameter(outer), units=model.units,
+                                scale=scale)
         opts = _validate_mesh_options(model.mesh, scale, outer, holes)
         return cls(model.name, model.units, outer, holes, material, opts)
 
@@ -518,10 +524,11 @@ def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
         max_area = m.max_area * scale**2
         n_est = poly.area / max_area if max_area > 0 else math.inf
         if n_est > MAX_TRIANGLES:
-            raise PartError(f"mesh.max_area = {m.max_area!r}: would need about {n_est:.3g} triangles "
-                            f"(limit {MAX_TRIANGLES:.0e}); increase max_area")
+            raise PartError(f"mesh.max_area = {m.max_area!r}: would need at least {n_est:.3g} "
+                            f"triangles (limit {MAX_TRIANGLES:,}); increase max_area")
     if any(len(p) != 2 for p in m.points):
         raise PartError("mesh.points: every point must be a pair [x, y]")
+    _limits.check_mesh_points(len(m.points))
     pts = np.asarray(m.points, dtype=float).reshape(-1, 2)
     if not np.all(np.isfinite(pts)):
         raise PartError("mesh.points: coordinate is not finite (NaN or inf); give numbers")
@@ -531,7 +538,7 @@ def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
     pts = pts * scale
     if len(pts):
         tol = 1e-9 * float(np.ptp(outer, axis=0).max())
-        inside = shapely.dwithin(shapely.points(pts), poly, tol)
+        inside = _limits.points_within(poly, pts, tol)  # indexed: no points × edges work
         if not inside.all():
             bad = int(np.flatnonzero(~inside)[0])
             raise PartError(f"mesh.points[{bad}]: point lies outside the part; move it onto or inside the part")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from ..errors import DeformClosureError
+from ..limits import limits_help
 from ..mesh import mesh_part, write_mesh
 from ..mesh.io import is_mesh_file, mesh_to_dict
 from .common import load_part_or_mesh, mesh_input_options, read_part, write_json
@@ -12,7 +13,8 @@ from .common import load_part_or_mesh, mesh_input_options, read_part, write_json
 __all__ = ["command"]
 
 
-@click.command(epilog="\b\nExample:\n  deformclosure mesh examples/plate_with_hole.json -o mesh.json --plot mesh.png")
+@click.command(epilog="\b\nExample:\n  deformclosure mesh examples/plate_with_hole.json -o mesh.json --plot mesh.png\n"
+                        + limits_help("mesh"))
 @click.argument("part", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Mesh file to write: .json (SPEC mesh JSON, metres) or any meshio format.")

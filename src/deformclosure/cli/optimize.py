@@ -8,6 +8,7 @@ import click
 import numpy as np
 
 from ..errors import DeformClosureError, GraspError
+from ..limits import check_model_size, limits_help
 from ..mesh import mesh_part
 from ..mesh.io import is_mesh_file
 from ..part import PartError
@@ -71,7 +72,7 @@ def load_grasp_inputs(path: str, at: tuple[str, ...] | None, units: str | None,
     return mesh, unit, scale, pts
 
 
-@click.command(epilog=EPILOG)
+@click.command(epilog=EPILOG + limits_help("optimize"))
 @click.argument("part", type=click.Path(dir_okay=False))
 @click.option("--model", type=click.Choice(["pads", "paper"]), default=None,
               help="pads (default): rigid pads on a grasp axis, converged (SPEC §6); "
@@ -158,6 +159,8 @@ def _pads(part, at, axis, pad_radius, pad_width, refine, grid_angles, grid_offse
 
     check_grid(grid_angles, grid_offsets)
     prt, mesh = load_part_or_mesh(part, units=units, material=material)
+    check_model_size(mesh, "pads", solvers=1 if prt is None else 2, refine=refine,
+                     n_axes=grid_angles * grid_offsets)
     unit = units if units is not None else ("m" if prt is None else prt.units)
     scale = length_scale(unit, "--units")
     ax = parse_axis(at, axis, scale)
@@ -231,6 +234,7 @@ def _paper(part, jaws, at, method, eps, expanding, jaw_width, units, material, o
     if not (np.isfinite(jaw_width) and jaw_width >= 0):
         raise GraspError(f"--jaw-width = {jaw_width!r}: must be a finite length >= 0 (0 = point jaws)")
     mesh, unit, scale, pts = load_grasp_inputs(part, at, units, material)
+    check_model_size(mesh, "paper", mode="expanding" if expanding else "contracting")
     if jaw_width * scale > mesh.diameter:
         raise GraspError(f"--jaw-width = {jaw_width:g} {unit}: wider than the part "
                          f"({mesh.diameter / scale:.4g} {unit}); check the value and --units")

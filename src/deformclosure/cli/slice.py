@@ -6,6 +6,7 @@ import click
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..limits import MAX_SLICE_RESOLUTION, limits_help
 from .common import load_part_or_mesh, parse_xy
 
 __all__ = ["command"]
@@ -19,7 +20,7 @@ Examples:
 Node ids are those of `deformclosure mesh PART` (the part is meshed the same way).
 --at and --extent are in --units (default: the part file's units, metres for mesh
 files). -o writes .npz arrays or, for a .json name, a JSON report; both SI.
-"""
+""" + limits_help("slice")
 
 
 @click.command(epilog=EPILOG)
@@ -30,7 +31,8 @@ files). -o writes .npz arrays or, for a .json name, a JSON report; both SI.
               help="Finger file (JSON; see `deformclosure check --help`).")
 @click.option("--extent", type=str, default=None, metavar="XMIN,XMAX,YMIN,YMAX",
               help="Region swept by the node (default: twice its longest edge around it).")
-@click.option("--resolution", type=int, default=200, show_default=True, help="Pixels per axis.")
+@click.option("--resolution", type=int, default=200, show_default=True,
+              help=f"Pixels per axis (2..{MAX_SLICE_RESOLUTION:,}).")
 @click.option("--energy", type=click.Choice(["linear", "corotational"]), default="linear", show_default=True)
 @click.option("--units", type=click.Choice(["m", "cm", "mm", "in"]), default=None,
               help="Units of --at and --extent.")
@@ -50,6 +52,10 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
     from ..units import length_scale
 
     fingers = load_fingers(finger_file)
+    from ..limits import check_slice_size
+
+    check_slice_size(resolution, len(fingers),         # before the part is even meshed
+                     json_output=bool(output) and str(output).lower().endswith(".json"))
     part_obj, mesh = load_part_or_mesh(part)
     unit = units if units is not None else (part_obj.units if part_obj is not None else "m")
     s = length_scale(unit, "--units")
@@ -71,8 +77,6 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
         if not all(np.isfinite(ext)) or max(abs(v) for v in ext) > reach:
             raise DeformClosureError(f"--extent {extent}: must be finite and within 100 part "
                                      "diameters of the part; check the values and --units")
-    if resolution < 2 or resolution > 4000:
-        raise DeformClosureError(f"--resolution {resolution}: use 2..4000 pixels per axis")
     if mesh.material is None:
         raise DeformClosureError(f"{part}: the mesh has no material; add one to the mesh file")
     res = dfree_slice(mesh, None, node, fingers, extent=ext, resolution=resolution, energy=energy)

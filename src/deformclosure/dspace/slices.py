@@ -14,6 +14,11 @@ adds the incident elements' energies to those of the others. Every pixel equals 
 direct call of :func:`.obstacles.in_dfree` / :func:`.energy.strain_energy` on the full
 configuration (tested).
 
+The pixels are processed in blocks of rows, and the fixed boundary edges are tested
+against each other once (candidate pairs from an R-tree, not all E² pairs), so the
+working memory does not grow with the resolution or the boundary; only the images do
+(at most :data:`deformclosure.limits.MAX_SLICE_RESOLUTION` pixels per axis).
+
 References
 ----------
 K. Gopalakrishnan and K. Goldberg, IJRR 24(11), 2005, §3.2 and Fig. 3.
@@ -32,7 +37,7 @@ from ..errors import DeformClosureError
 from .energy import EnergyKind, _ElementModel, as_configurations
 from .fingers import Finger
 from .obstacles import _collides, _edge_terms, touch_tolerance
-from .topology import DEFAULT_MIN_AREA_RATIO, _edge_pairs, _folded, _segments_meet, _signed_areas, loop_edges
+from .topology import DEFAULT_MIN_AREA_RATIO, _folded, _segments_meet, _signed_areas, loop_edges
 
 __all__ = ["SliceResult", "dfree_slice"]
 
@@ -196,85 +201,61 @@ def dfree_slice(
     if ext.size != 4 or not np.all(np.isfinite(ext)) or ext[1] <= ext[0] or ext[3] <= ext[2]:
         raise DeformClosureError(f"extent = {extent!r}: give (xmin, xmax, ymin, ymax) with xmin < xmax, ymin < ymax")
     nx, ny = _resolution(resolution)
+    from ..limits import MAX_SLICE_RESOLUTION
+
+    if nx * ny > MAX_SLICE_RESOLUTION**2:
+        raise DeformClosureError(f"resolution = {resolution!r}: {nx} x {ny} pixels, more than "
+                                 f"{MAX_SLICE_RESOLUTION} x {MAX_SLICE_RESOLUTION}; lower it")
     xs = np.linspace(ext[0], ext[1], nx)
     ys = np.linspace(ext[2], ext[3], ny)
-    G = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)  # (P, 2), row-major in y
-    P = len(G)
+    P = nx * ny
     tol = touch_tolerance(mesh) if tol is None else float(tol)
     fingers = list(fingers)
 
-    # --- D_T: triangles
+    # --- D_T: triangles (what does not depend on the moving node, once)
     rest_area = _signed_areas(nodes0[None], tri)[0]
     areas_fixed = _signed_areas(x[None], tri)[0]
     fixed_tri = np.ones(len(tri), bool)
     fixed_tri[inc] = False
     ok_fixed = bool(np.all(areas_fixed[fixed_tri] > min_area_ratio * rest_area[fixed_tri]))
-    pts = x[tri[inc]]  # (k, 3, 2)
-    pts = np.broadcast_to(pts, (P,) + pts.shape).copy()
-    slot = tri[inc] == v  # (k, 3)
-    kk, jj = np.nonzero(slot)
-    pts[:, kk, jj, :] = G[:, None, :]
-    d1 = pts[..., 1, :] - pts[..., 0, :]
-    d2 = pts[..., 2, :] - pts[..., 0, :]
-    ar = 0.5 * (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0])
-    in_dt = np.all(ar > min_area_ratio * rest_area[inc], axis=1) & ok_fixed
+    kk, jj = np.nonzero(tri[inc] == v)
 
-    # --- D_T: boundary rings
+    # --- D_T: boundary rings. Fixed edges against each other once (candidate pairs from an
+    # R-tree of their bounding boxes: no E² table), the moving edges per pixel.
     edges = loop_edges(mesh.loops)
     moving = np.flatnonzero(np.any(edges == v, axis=1))
-    pairs, adj = _edge_pairs(edges)
-    if len(moving) == 0:
-        fixed_bad = _ring_problems(x, edges, pairs, adj)
-        in_dt &= not fixed_bad
-    else:
-        is_mov = np.zeros(len(edges), bool)
-        is_mov[moving] = True
-        fp = pairs[~is_mov[pairs[:, 0]] & ~is_mov[pairs[:, 1]]]
-        fa = adj[~np.any(adj == v, axis=1)]
-        in_dt &= not _ring_problems(x, edges, fp, fa)
-        # consecutive triples that contain the moving node: fold-back tests per pixel
-        for a_, b_, c_ in adj[np.any(adj == v, axis=1)]:
-            pa = G if a_ == v else np.broadcast_to(x[a_], G.shape)
-            pb = G if b_ == v else np.broadcast_to(x[b_], G.shape)
-            pc = G if c_ == v else np.broadcast_to(x[c_], G.shape)
-            in_dt &= ~_folded(pa, pb, pc)
-        # moving edges against the non-adjacent fixed edges, pruned by bounding box
-        lo_g, hi_g = G.min(axis=0), G.max(axis=0)
-        for e in moving:
-            other = int(edges[e, 0] if edges[e, 1] == v else edges[e, 1])
-            cand = np.flatnonzero(~is_mov & ~np.any(np.isin(edges, edges[e]), axis=1))
-            lo = np.minimum(lo_g, x[other])
-            hi = np.maximum(hi_g, x[other])
-            ea, eb = x[edges[cand, 0]], x[edges[cand, 1]]
-            box = np.all((np.minimum(ea, eb) <= hi) & (np.maximum(ea, eb) >= lo), axis=1)
-            cand = cand[box]
-            if len(cand):
-                ga = G[:, None, :]
-                oa = np.broadcast_to(x[other], G.shape)[:, None, :]
-                meet = _segments_meet(ga, oa, x[edges[cand, 0]][None], x[edges[cand, 1]][None])
-                in_dt &= ~meet.any(axis=1)
+    adj = _adjacent_triples(edges)
+    is_mov = np.zeros(len(edges), bool)
+    is_mov[moving] = True
+    fixed_edges = np.flatnonzero(~is_mov)
+    ok_rings = not _fixed_ring_problems(x, edges, fixed_edges, adj[~np.any(adj == v, axis=1)])
+    fold_triples = adj[np.any(adj == v, axis=1)] if len(moving) else adj[:0]
+    # moving edges against the non-adjacent fixed edges, pruned by the grid's bounding box
+    lo_g = np.array([ext[0], ext[2]])
+    hi_g = np.array([ext[1], ext[3]])
+    meet_tests = []
+    for e in moving:
+        other = int(edges[e, 0] if edges[e, 1] == v else edges[e, 1])
+        cand = np.flatnonzero(~is_mov & ~np.any(np.isin(edges, edges[e]), axis=1))
+        lo = np.minimum(lo_g, x[other])
+        hi = np.maximum(hi_g, x[other])
+        ea, eb = x[edges[cand, 0]], x[edges[cand, 1]]
+        box = np.all((np.minimum(ea, eb) <= hi) & (np.maximum(ea, eb) >= lo), axis=1)
+        cand = cand[box]
+        if len(cand):
+            meet_tests.append((other, x[edges[cand, 0]][None], x[edges[cand, 1]][None]))
 
-    # --- D-obstacles
-    obstacles = np.zeros((len(fingers), P), dtype=bool)
+    # --- D-obstacles: the fixed edges' terms once per finger
     if len(moving) == 0:
         a, b = x[edges[:, 0]], x[edges[:, 1]]
-        for i, f in enumerate(fingers):
-            obstacles[i] = bool(_collides(f, _edge_terms(f, a[None], b[None], tol), tol)[0])
+        static = np.array([bool(_collides(f, _edge_terms(f, a[None], b[None], tol), tol)[0])
+                           for f in fingers], dtype=bool)
+        t_fixed = []
     else:
-        fixed = np.setdiff1d(np.arange(len(edges)), moving)
-        fa_, fb_ = x[edges[fixed, 0]][None], x[edges[fixed, 1]][None]
-        ma = np.empty((P, len(moving), 2))
-        mb = np.empty((P, len(moving), 2))
-        for j, e in enumerate(moving):
-            ma[:, j] = G if edges[e, 0] == v else x[edges[e, 0]]
-            mb[:, j] = G if edges[e, 1] == v else x[edges[e, 1]]
-        for i, f in enumerate(fingers):
-            t_fixed = _edge_terms(f, fa_, fb_, tol)
-            t_mov = _edge_terms(f, ma, mb, tol)
-            obstacles[i] = _collides(f, t_mov.combine(t_fixed), tol)
-    free = in_dt & ~np.any(obstacles, axis=0)
+        fa_, fb_ = x[edges[fixed_edges, 0]][None], x[edges[fixed_edges, 1]][None]
+        t_fixed = [_edge_terms(f, fa_, fb_, tol) for f in fingers]
 
-    # --- energy
+    # --- energy: what does not depend on the moving node
     if energy == "linear":
         if stiffness is None:
             from ..elasticity.stiffness import stiffness_matrix
@@ -285,14 +266,56 @@ def dfree_slice(
         U0 = 0.5 * float(X @ KX)
         dofs = [2 * v, 2 * v + 1]
         Kvv = stiffness[dofs][:, dofs].toarray()
-        d = G - x[v]
-        U = U0 + d @ KX[dofs] + 0.5 * np.einsum("pi,ij,pj->p", d, Kvv, d)
     else:
         model = _ElementModel(mesh)
         e_all = model.energies(x[None], "corotational")[0]
         base = float(e_all[fixed_tri].sum())
-        # only the incident triangles' node positions matter: build them directly
-        U = base + _incident_energies(model, x, v, inc, G).sum(axis=1)
+
+    # --- per pixel, in blocks of rows: the working arrays stay small at any resolution
+    free = np.empty(P, bool)
+    in_dt = np.empty(P, bool)
+    obstacles = np.zeros((len(fingers), P), dtype=bool)
+    U = np.empty(P)
+    n_cand = sum(t[1].shape[1] for t in meet_tests)
+    per_px = 8 * (12 * len(inc) + 20 * n_cand + 16 * len(moving) + 32)
+    rows = max(1, min(ny, int(_SLICE_BLOCK_BYTES // max(per_px * nx, 1))))
+    for r0 in range(0, ny, rows):
+        gy = ys[r0:r0 + rows]
+        G = np.stack(np.meshgrid(xs, gy), axis=-1).reshape(-1, 2)   # row-major in y
+        sl = slice(r0 * nx, r0 * nx + len(G))
+        pts = np.broadcast_to(x[tri[inc]], (len(G), len(inc), 3, 2)).copy()
+        pts[:, kk, jj, :] = G[:, None, :]
+        d1 = pts[..., 1, :] - pts[..., 0, :]
+        d2 = pts[..., 2, :] - pts[..., 0, :]
+        ar = 0.5 * (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0])
+        del pts, d1, d2
+        ok = np.all(ar > min_area_ratio * rest_area[inc], axis=1) & ok_fixed & ok_rings
+        for a_, b_, c_ in fold_triples:
+            pa = G if a_ == v else np.broadcast_to(x[a_], G.shape)
+            pb = G if b_ == v else np.broadcast_to(x[b_], G.shape)
+            pc = G if c_ == v else np.broadcast_to(x[c_], G.shape)
+            ok &= ~_folded(pa, pb, pc)
+        for other, ca, cb in meet_tests:
+            oa = np.broadcast_to(x[other], G.shape)[:, None, :]
+            ok &= ~_segments_meet(G[:, None, :], oa, ca, cb).any(axis=1)
+        in_dt[sl] = ok
+        if len(moving) == 0:
+            obstacles[:, sl] = static[:, None]
+        else:
+            ma = np.empty((len(G), len(moving), 2))
+            mb = np.empty((len(G), len(moving), 2))
+            for j, e in enumerate(moving):
+                ma[:, j] = G if edges[e, 0] == v else x[edges[e, 0]]
+                mb[:, j] = G if edges[e, 1] == v else x[edges[e, 1]]
+            for i, f in enumerate(fingers):
+                obstacles[i, sl] = _collides(f, _edge_terms(f, ma, mb, tol).combine(t_fixed[i]), tol)
+        free[sl] = ok & ~np.any(obstacles[:, sl], axis=0)
+        if energy == "linear":
+            d = G - x[v]
+            U[sl] = U0 + d @ KX[dofs] + 0.5 * np.einsum("pi,ij,pj->p", d, Kvv, d)
+        else:
+            # only the incident triangles' node positions matter: build them directly
+            U[sl] = base + _incident_energies(model, x, v, inc, G).sum(axis=1)
     shape = (ny, nx)
     return SliceResult(
         node=v, xs=xs, ys=ys, free=free.reshape(shape), in_dt=in_dt.reshape(shape),
@@ -301,15 +324,46 @@ def dfree_slice(
     )
 
 
-def _ring_problems(x: np.ndarray, edges: np.ndarray, pairs: np.ndarray, adj: np.ndarray) -> bool:
-    """Do the given boundary-edge pairs meet, or consecutive edges fold, in configuration ``x``?"""
+#: Working memory of one block of slice pixels (bytes): the slice is computed in blocks of
+#: rows so that a 2000 x 2000 slice needs no more than its images.
+_SLICE_BLOCK_BYTES = 64e6
+
+
+def _adjacent_triples(edges: np.ndarray) -> np.ndarray:
+    """Consecutive edges ``(u, v), (v, w)`` along the loops as ``(u, v, w)`` rows, O(E)."""
+    if not len(edges):
+        return np.zeros((0, 3), np.int64)
+    start_of = np.full(int(edges.max()) + 1, -1, dtype=np.int64)
+    start_of[edges[:, 0]] = np.arange(len(edges))
+    k2 = start_of[edges[:, 1]]
+    return np.stack([edges[:, 0], edges[:, 1], edges[k2, 1]], axis=1)
+
+
+def _fixed_ring_problems(x: np.ndarray, edges: np.ndarray, subset: np.ndarray,
+                         adj: np.ndarray) -> bool:
+    """Do the boundary edges ``subset`` meet each other (non-adjacent pairs), or do the
+    consecutive edges ``adj`` fold back, in configuration ``x``?
+
+    Only pairs whose bounding boxes overlap can meet: they come from an R-tree query, so
+    no table of all E² pairs is built (a 6 000-edge boundary took gigabytes)."""
+    import shapely
+
     bad = False
     if len(adj):
         bad |= bool(np.any(_folded(x[adj[:, 0]], x[adj[:, 1]], x[adj[:, 2]])))
-    if len(pairs) and not bad:
-        e1, e2 = edges[pairs[:, 0]], edges[pairs[:, 1]]
-        bad |= bool(np.any(_segments_meet(x[e1[:, 0]], x[e1[:, 1]], x[e2[:, 0]], x[e2[:, 1]])))
-    return bad
+    if bad or len(subset) < 2:
+        return bad
+    e = edges[subset]
+    pa, pb = x[e[:, 0]], x[e[:, 1]]
+    lo, hi = np.minimum(pa, pb), np.maximum(pa, pb)
+    boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+    i, j = shapely.STRtree(boxes).query(boxes)
+    keep = i < j
+    i, j = i[keep], j[keep]
+    share = ((e[i, 0] == e[j, 0]) | (e[i, 0] == e[j, 1]) | (e[i, 1] == e[j, 0])
+             | (e[i, 1] == e[j, 1]))
+    i, j = i[~share], j[~share]
+    return bool(len(i)) and bool(np.any(_segments_meet(pa[i], pb[i], pa[j], pb[j])))
 
 
 def _incident_energies(model: _ElementModel, x: np.ndarray, v: int, inc: np.ndarray, G: np.ndarray) -> np.ndarray:

@@ -1,0 +1,762 @@
+"""Resource limits: refuse early, from a size estimate, what cannot finish or fit in memory.
+
+Every heavy step of the package has a cost that follows from sizes known before it
+starts: the number of triangles a part will mesh into (its area over ``max_area``, its
+boundary and its narrow features), the number of boundary nodes ``p`` of a mesh (the
+paper model's contact graph has ``p²/2`` vertices; both models condense the stiffness
+onto dense ``2p × 2p`` boundary matrices), the number of nodes ``n`` (the sparse
+factorisation of ``K``), the pixels of a slice. This module holds, in one place, the
+maximum of each, what it protects, the measured cost per unit it is derived from, and the
+checks that compare a request against it before the work begins. Each check raises the
+package's usual one-line error (:class:`~deformclosure.errors.PartError`,
+:class:`~deformclosure.errors.GraspError`, …) naming the field or option and the fix.
+
+The maxima are set for a machine with :data:`MEMORY_BUDGET` = 4 GB; the costs were
+measured with ``benchmarks/bench_limits.py``, which runs every command at (or near) its
+documented maximum and prints its peak resident memory and time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from .errors import DeformClosureError, GraspError, PartError
+
+__all__ = [
+    "MEMORY_BUDGET",
+    "MAX_TRIANGLES",
+    "MAX_THIN_ELEMENTS",
+    "MIN_GAP_FRACTION",
+    "MAX_MESH_POINTS",
+    "MAX_BOUNDARY_NODES_PAPER",
+    "MAX_BOUNDARY_NODES_PADS",
+    "MAX_AVERAGING_NONZEROS",
+    "MAX_SLICE_RESOLUTION",
+    "MeshEstimate",
+    "estimate_triangles",
+    "check_mesh_size",
+    "check_mesh_result",
+    "check_ring_gaps",
+    "ring_gap_pairs",
+    "local_feature_sizes",
+    "points_within",
+    "check_strain_responses",
+    "steiner_cap",
+    "check_mesh_points",
+    "estimate_model_bytes",
+    "check_plan_size",
+    "check_model_size",
+    "check_slice_size",
+    "limits_help",
+]
+
+GB = 1e9
+
+#: Memory every documented maximum must fit in (bytes): 4 GB, including the Python
+#: interpreter and the imported libraries (about 0.15 GB).
+MEMORY_BUDGET = 4.0 * GB
+
+#: Resident memory of the interpreter with numpy, scipy, shapely, numba and the package
+#: imported (bytes), measured.
+BASE_BYTES = 0.2 * GB
+
+# --------------------------------------------------------------------------- meshing
+#: Largest mesh (triangles) a part may be meshed into. Protects the sparse factorisation
+#: of ``K`` that every analysis (optimize, plan, check) starts with: its fill grows like
+#: ``n log n`` (:data:`FACTOR_BYTES_PER_NLOGN`): measured 5.2 GB at 400 000 nodes
+#: (800 000 triangles), estimated 2.5 GB at 200 000 nodes, which leaves room for the rest
+#: of an analysis in 4 GB (the analyses add their own estimate: a pads optimize with its
+#: twin on a 190 000-triangle block measured 3.7 GB). ``mesh`` at the limit: 0.65 GB,
+#: 12 s. The count is estimated before meshing
+#: (:func:`estimate_triangles`) and enforced after it (the mesher's Steiner points are
+#: capped, so a wrong estimate cannot run away).
+MAX_TRIANGLES = 400_000
+
+#: Largest number of boundary elements that narrow features of a part may force
+#: (:attr:`MeshEstimate.thin_elements`). Protects the mesher's *time*: in a long narrow
+#: strip the quality mesher is super-linear (measured: a 10 × 1e-4 mm strip, 2e5 boundary
+#: elements, 144 000 triangles in 2.4 s; 10 × 3e-5 mm, 420 000 triangles in 78 s;
+#: 10 × 1e-5 mm, 1.2 million triangles in 123 s).
+MAX_THIN_ELEMENTS = 100_000
+
+#: Smallest gap between two rings of a part (a hole and the outer ring, or two holes), as
+#: a fraction of the part's diameter. Protects the mesher: a hole 1e-7 mm from the outer
+#: ring was refused only after 49 s and 3.75 GB; now it is refused on reading the part.
+MIN_GAP_FRACTION = 1e-6
+
+#: Largest number of extra points (``mesh.points`` and ``--at``) inserted as mesh nodes.
+#: Each becomes a node with its own graded neighbourhood, which the triangle estimate
+#: counts; inserting them takes an R-tree query each (10 000 points on a 20 000-vertex
+#: ring used to build a 10 000 × 20 000 table).
+MAX_MESH_POINTS = 50_000
+
+# Triangles per unit, measured with Triangle (20250106) at min angles 10..34 degrees:
+# area-driven triangles per area/max_area, per boundary vertex (its graded neighbourhood),
+# per boundary element forced by a narrow feature.
+_ANGLES = np.array([0.0, 10.0, 20.0, 25.0, 30.0, 33.0, 34.0])
+_PER_AREA = np.array([1.6, 1.6, 1.6, 1.6, 1.6, 1.75, 1.9])
+_PER_VERTEX = np.array([1.9, 1.9, 3.0, 4.1, 4.9, 8.0, 9.3])
+_PER_THIN = np.array([0.26, 0.26, 0.41, 0.54, 0.7, 0.8, 0.8])
+# At 30 degrees a vertex's neighbourhood is about 2.8 + 0.36 log2(h / lfs) triangles (h: the
+# element size of max_area, lfs: the vertex's local feature size), fitted on circles of
+# 1000 to 20 000 vertices; other angles scale it like _PER_VERTEX.
+_VERTEX_30 = 4.9
+_VERTEX_BASE = 2.8
+_VERTEX_PER_HALVING = 0.36
+
+# --------------------------------------------------------------------------- analyses
+#: Sparse LU of ``K`` (METIS nested dissection, SuperLU): bytes per ``n log2 n`` (n = mesh
+#: nodes), measured 1.05 GB at 79 000 nodes and 5.2 GB at 398 000 (unit-aspect parts).
+FACTOR_BYTES_PER_NLOGN = 700.0
+
+#: Bytes per mesh triangle held by a mesh, its stiffness matrix and their temporaries.
+MESH_BYTES_PER_TRIANGLE = 1_000.0
+
+#: Dense boundary matrices of a condensation (compliance, its Cholesky factor and the
+#: copies made while forming it): bytes per ``p²`` (p = boundary nodes) — five
+#: ``2p × 2p`` float arrays.
+CONDENSE_BYTES_PER_P2 = 5 * 4 * 8.0
+
+#: Largest number of jaw nodes (outer-loop nodes; every loop's for expanding grasps) for
+#: ``--model paper``. Protects the contact graph over all ``p(p−1)/2`` node pairs: building
+#: it takes :data:`PAPER_GRAPH_BYTES_PER_P2` bytes per ``p²`` (measured 2.0 GB at p = 1000,
+#: 4.3 GB at p = 1400 — a 3000-vertex circle needed about 19 GB). Measured at the limit
+#: (a 1200-vertex circle): plan 3.1 GB (122 s with --top 0), optimize 3.1 GB.
+MAX_BOUNDARY_NODES_PAPER = 1_200
+
+#: Peak bytes per ``p²`` of building the paper model's contact graph (measured).
+PAPER_GRAPH_BYTES_PER_P2 = 2_100.0
+
+#: Largest number of boundary nodes (all loops) for the pads model (optimize, plan) and
+#: for ``check``. Protects the dense ``2p × 2p`` condensed and axis-constrained
+#: compliances of the solver and of its noise-floor twin (:data:`PADS_SOLVER_BYTES_PER_P2`
+#: each; ``check`` holds three) and the contact curves of the release landscape
+#: (:data:`PADS_AXIS_BYTES_PER_NODE` per axis and node). Measured on a 2000-vertex circle:
+#: plan 2.9 GB (345 s), optimize 1.9 GB, check 1.9 GB.
+MAX_BOUNDARY_NODES_PADS = 2_000
+
+#: Bytes per ``p²`` kept by one pads solver (condensed and axis-constrained compliances),
+#: measured 215 (one and two solvers on a 1000-node circle), and the transient of building
+#: one, 55.
+PADS_SOLVER_BYTES_PER_P2 = 215.0
+PADS_WORK_BYTES_PER_P2 = 55.0
+
+#: Bytes per grasp axis and boundary node of the release landscape's contact curves,
+#: measured 180-210 (plans of 500- and 1000-node circles, 1440 axes).
+PADS_AXIS_BYTES_PER_NODE = 210.0
+
+#: Largest number of non-zeros of the critical-distance averaging operator (pads model,
+#: SPEC §6): every element times the elements whose centroids lie within the critical
+#: distance ℓ of its own — about ``m² π ℓ² / A``. Protects its construction, which takes
+#: :data:`AVERAGING_BYTES_PER_NONZERO` bytes per non-zero.
+MAX_AVERAGING_NONZEROS = 40_000_000
+
+#: Peak bytes per non-zero of building the averaging operator (pair list, COO, CSR).
+AVERAGING_BYTES_PER_NONZERO = 60.0
+
+#: Strain responses of the paper planner (``pair_elastic_limits``): bytes per perimeter
+#: node and triangle (6 strain rows of 8 bytes) plus per perimeter node and node.
+STRAIN_BYTES_PER_PM = 48.0
+STRAIN_BYTES_PER_PN = 32.0
+
+# --------------------------------------------------------------------------- slices
+#: Largest ``--resolution`` (pixels per axis) of a D-space slice. The slice is computed
+#: in blocks of pixels, so only its images grow with the resolution: per pixel 8 bytes of
+#: energy, 1 byte per image (D_free, D_T, one per finger), and about
+#: :data:`SLICE_JSON_BYTES_PER_VALUE` per value when written as JSON (measured: 2000 x
+#: 2000 pixels, 4 fingers, JSON: 0.9 GB, 17 s; 4000 x 4000 took 3.3 GB before the blocks).
+MAX_SLICE_RESOLUTION = 2_000
+
+#: Peak bytes per image value while a slice is written as JSON (Python lists, text).
+SLICE_JSON_BYTES_PER_VALUE = 60.0
+
+
+def _fmt(n: float) -> str:
+    """A count for messages: ``1,200`` or ``3.9e+06``."""
+    return f"{int(n):,}" if n < 1e7 else f"{n:.2g}"
+
+
+# --------------------------------------------------------------------------- rings
+def _ring_arrays(rings: Sequence[np.ndarray]):
+    sizes = np.array([len(r) for r in rings], dtype=np.int64)
+    P = np.concatenate([np.asarray(r, float) for r in rings])
+    start = np.repeat(np.cumsum(sizes) - sizes, sizes)
+    size = np.repeat(sizes, sizes)
+    loc = np.arange(len(P)) - start
+    nxt = start + (loc + 1) % size
+    prv = start + (loc - 1) % size
+    ring = np.repeat(np.arange(len(rings)), sizes)
+    return P, nxt, prv, ring
+
+
+def local_feature_sizes(rings: Sequence[np.ndarray]) -> np.ndarray:
+    """Distance from every ring vertex, through the part, to the nearest edge not incident
+    to it (m), in ring order (outer first): the size of the smallest triangles a quality
+    mesher must put there.
+
+    It never exceeds the shorter incident edge (the next edge starts at the neighbour), so
+    only edges within that distance are examined (a bounding-box query); an edge counts
+    when the segment to its closest point passes through the part (a narrow slot of the
+    exterior does not force small triangles). O((k + pairs) log k) for k vertices.
+    """
+    import shapely
+
+    P, nxt, prv, _ = _ring_arrays(rings)
+    Q = P[nxt]
+    L = np.hypot(Q[:, 0] - P[:, 0], Q[:, 1] - P[:, 1])
+    r = np.minimum(L, L[prv])
+    lo, hi = np.minimum(P, Q), np.maximum(P, Q)
+    tree = shapely.STRtree(shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]))
+    vi, ei = tree.query(shapely.box(P[:, 0] - r, P[:, 1] - r, P[:, 0] + r, P[:, 1] + r))
+    keep = (ei != vi) & (ei != prv[vi])
+    vi, ei = vi[keep], ei[keep]
+    a, ab = P[ei], Q[ei] - P[ei]
+    t = np.clip(((P[vi] - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
+    c = a + t[:, None] * ab
+    d = np.hypot(P[vi, 0] - c[:, 0], P[vi, 1] - c[:, 1])
+    lfs = r.copy()
+    close = d < r[vi]
+    if close.any():
+        vi, c, d = vi[close], c[close], d[close]
+        poly = shapely.Polygon(rings[0], list(rings[1:]))
+        shapely.prepare(poly)
+        mid = 0.5 * (P[vi] + c)
+        inside = shapely.contains_xy(poly, mid[:, 0], mid[:, 1])
+        np.minimum.at(lfs, vi[inside], d[inside])
+    return lfs
+
+
+def points_within(polygon, points: np.ndarray, tol: float) -> np.ndarray:
+    """Which ``points`` (q, 2) lie in ``polygon`` or within ``tol`` of it (m).
+
+    The same as ``shapely.distance(points, polygon) <= tol`` but indexed: a prepared
+    point-in-polygon test, then an R-tree of the boundary edges for the points outside —
+    O((q + k) log k) instead of q × k segment distances (10 000 points on a 20 000-vertex
+    ring: milliseconds instead of seconds).
+    """
+    import shapely
+
+    pts = np.asarray(points, float).reshape(-1, 2)
+    if not len(pts):
+        return np.zeros(0, bool)
+    shapely.prepare(polygon)
+    inside = np.asarray(shapely.contains_xy(polygon, pts[:, 0], pts[:, 1]), bool)
+    out = np.flatnonzero(~inside)
+    if len(out):
+        rings = [np.asarray(polygon.exterior.coords)] + [np.asarray(r.coords) for r in polygon.interiors]
+        segs = np.concatenate([np.stack([r[:-1], r[1:]], axis=1) for r in rings])
+        tree = shapely.STRtree(shapely.linestrings(segs))
+        pi, _ = tree.query(shapely.points(pts[out]), predicate="dwithin", distance=tol)
+        inside[out[np.unique(pi)]] = True
+    return inside
+
+
+@dataclass(frozen=True)
+class MeshEstimate:
+    """Estimated size of a quality mesh of a part, before meshing.
+
+    Attributes
+    ----------
+    triangles : float
+        Estimated number of triangles: area-driven (``area / max_area``), plus the graded
+        neighbourhood of every boundary vertex and inserted point, plus the boundary
+        elements forced by narrow features — each times its measured rate at the min angle.
+    area_triangles : float
+        ``area / max_area`` (a lower bound of the count).
+    thin_elements : float
+        Boundary elements that narrow features force beyond one per edge: ``∫ ds / lfs − 1``
+        summed over the edges, with the local feature size ``lfs`` interpolated between
+        the edge's vertices (a strip ``L`` long and ``w`` wide: about ``2 L / w``).
+    narrowest : float
+        Smallest local feature size at a vertex of the worst edge (m).
+    worst_ring : int
+        Ring (0 = outer, i + 1 = holes[i]) of the edge forcing the most elements.
+    worst_length : float
+        Length of that edge (m).
+    """
+
+    triangles: float
+    area_triangles: float
+    thin_elements: float
+    narrowest: float
+    worst_ring: int
+    worst_length: float
+
+
+def estimate_triangles(rings: Sequence[np.ndarray], max_area: float, min_angle: float = 30.0,
+                       points: np.ndarray | None = None) -> MeshEstimate:
+    """Estimate the triangle count of a quality mesh of a polygon with holes.
+
+    Parameters
+    ----------
+    rings : sequence of ndarray (k, 2)
+        Outer ring then holes (m), not closed, with any inserted boundary points.
+    max_area : float
+        Largest triangle area (m²).
+    min_angle : float
+        Smallest angle (degrees).
+    points : ndarray (q, 2), optional
+        Extra points (m) inserted inside the part.
+
+    Returns
+    -------
+    MeshEstimate
+        Within a factor of about 1.5 of Triangle's count on squares, circles with up to
+        20 000 vertices, notched bars, thin strips and slots (measured).
+    """
+    import shapely
+
+    points = np.zeros((0, 2)) if points is None else np.asarray(points, float).reshape(-1, 2)
+    area = float(shapely.Polygon(rings[0], list(rings[1:])).area)
+    P, nxt, _, ring = _ring_arrays(rings)
+    L = np.hypot(*(P[nxt] - P).T)
+    lfs = np.maximum(local_feature_sizes(rings), 1e-300)
+    ga, gb = lfs, lfs[nxt]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        integral = np.where(np.abs(gb - ga) <= 1e-9 * ga, L / ga,
+                            L * np.log(gb / ga) / (gb - ga))
+    integral = np.where(np.isfinite(integral), integral, L / np.minimum(ga, gb))
+    thin = np.maximum(integral - 1.0, 0.0)
+    a = float(min(max(min_angle, 0.0), 34.0))
+    per_area = float(np.interp(a, _ANGLES, _PER_AREA))
+    per_thin = float(np.interp(a, _ANGLES, _PER_THIN))
+    # Each vertex (and inserted point) is the centre of a graded neighbourhood whose size
+    # grows with the number of halvings from the element size of max_area down to its
+    # local feature size.
+    grade = float(np.interp(a, _ANGLES, _PER_VERTEX)) / _VERTEX_30
+    h = math.sqrt(4.0 * max_area / math.sqrt(3.0))
+    depth = np.log2(np.maximum(h / lfs, 1.0))
+    vertex = grade * float(np.sum(_VERTEX_BASE + _VERTEX_PER_HALVING * depth))
+    if len(points):
+        from scipy.spatial import cKDTree
+
+        allp = np.concatenate([P, points])
+        d, _ = cKDTree(allp).query(points, k=2)
+        dp = np.log2(np.maximum(h / np.maximum(d[:, 1], 1e-300), 1.0))
+        vertex += grade * float(np.sum(_VERTEX_BASE + _VERTEX_PER_HALVING * dp))
+    n_area = area / max_area
+    total = per_area * n_area + vertex + per_thin * float(thin.sum())
+    w = int(np.argmax(thin)) if len(thin) else 0
+    return MeshEstimate(triangles=total, area_triangles=n_area, thin_elements=float(thin.sum()),
+                        narrowest=float(min(ga[w], gb[w])), worst_ring=int(ring[w]),
+                        worst_length=float(L[w]))
+
+
+def _ring_name(i: int) -> str:
+    return "outer" if i == 0 else f"holes[{i - 1}]"
+
+
+def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: float = 30.0,
+                    points: np.ndarray | None = None, *, units: str = "m", scale: float = 1.0,
+                    field: str = "max_area") -> MeshEstimate:
+    """Refuse, before meshing, a mesh estimated above :data:`MAX_TRIANGLES` or a part
+    whose narrow features force more than :data:`MAX_THIN_ELEMENTS` boundary elements.
+
+    Parameters
+    ----------
+    rings, max_area, min_angle, points
+        As :func:`estimate_triangles` (SI).
+    units, scale : str, float
+        Unit of lengths in messages and metres per unit.
+    field : str
+        Name of the max_area setting in messages (``mesh.max_area`` or ``--max-area``).
+
+    Raises
+    ------
+    PartError
+    """
+    import shapely
+
+    check_mesh_points(0 if points is None else len(points))
+    ma = max_area / scale**2
+    # The area alone (a lower bound of the count) refuses absurd requests before the
+    # boundary is examined.
+    area = float(shapely.Polygon(rings[0], list(rings[1:])).area)
+    per_area = float(np.interp(min(max(min_angle, 0.0), 34.0), _ANGLES, _PER_AREA))
+    if per_area * area / max_area > MAX_TRIANGLES:
+        n = per_area * area / max_area
+        raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about {_fmt(n)} "
+                        f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= "
+                        f"{max_area * n / MAX_TRIANGLES / scale**2:.2g} {units}²")
+    est = estimate_triangles(rings, max_area, min_angle, points)
+    if est.thin_elements > MAX_THIN_ELEMENTS:
+        w = est.narrowest / scale
+        ln = est.worst_length / scale
+        raise PartError(
+            f"{_ring_name(est.worst_ring)}: the part is only {w:.3g} {units} wide along a "
+            f"{ln:.3g} {units} edge; meshing such narrow features needs about "
+            f"{_fmt(est.thin_elements)} boundary elements (limit {MAX_THIN_ELEMENTS:,}); "
+            "widen or remove the narrow feature")
+    if est.triangles > MAX_TRIANGLES:
+        need = max_area * est.triangles / MAX_TRIANGLES / scale**2
+        raise PartError(
+            f"{field} = {ma:.3g} {units}²: the mesh would have about {_fmt(est.triangles)} "
+            f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= {need:.2g} {units}² or "
+            "simplify the part's boundary")
+    return est
+
+
+def steiner_cap() -> int:
+    """Steiner points the mesher may add: enough for :data:`MAX_TRIANGLES` with room to
+    spare, so a capped (truncated) mesh always exceeds the maximum and is refused."""
+    return MAX_TRIANGLES
+
+
+def check_mesh_result(n_triangles: int, max_area: float, *, units: str = "m",
+                      scale: float = 1.0, field: str = "max_area") -> None:
+    """Refuse a mesh that came out above :data:`MAX_TRIANGLES` (the estimate was low, or the
+    mesher hit its Steiner-point cap).
+
+    Raises
+    ------
+    MeshError
+    """
+    from .errors import MeshError
+
+    if n_triangles > MAX_TRIANGLES:
+        ma = max_area / scale**2
+        raise MeshError(f"{field} = {ma:.3g} {units}²: the mesh has {n_triangles:,} triangles, "
+                        f"more than the limit {MAX_TRIANGLES:,}; increase {field} or lower "
+                        "mesh.min_angle")
+
+
+def check_mesh_points(n_points: int, field: str = "mesh.points") -> None:
+    """Refuse more than :data:`MAX_MESH_POINTS` extra mesh nodes.
+
+    Raises
+    ------
+    PartError
+    """
+    if n_points > MAX_MESH_POINTS:
+        raise PartError(f"{field}: {n_points:,} points, more than the limit {MAX_MESH_POINTS:,}; "
+                        "insert only the intended contact locations")
+
+
+def ring_gap_pairs(rings: Sequence[np.ndarray], min_gap: float
+                   ) -> tuple[float, int, int] | None:
+    """The closest pair of different rings nearer than ``min_gap`` (m): ``(gap, i, j)`` with
+    ring indices ``i < j`` (0 = outer), or ``None``.
+
+    Two segments are nearest at an endpoint of one of them, so it suffices to find, for
+    every vertex, the edges of *other* rings within ``min_gap`` — an R-tree query with that
+    radius, O(k log k) for k vertices in all, whatever the number of holes.
+    """
+    import shapely
+
+    if len(rings) < 2:
+        return None
+    P, nxt, _, ring = _ring_arrays(rings)
+    tree = shapely.STRtree(shapely.linestrings(np.stack([P, P[nxt]], axis=1)))
+    vi, ei = tree.query(shapely.points(P), predicate="dwithin", distance=min_gap)
+    other = ring[vi] != ring[ei]
+    if not other.any():
+        return None
+    vi, ei = vi[other], ei[other]
+    a, ab = P[ei], P[nxt[ei]] - P[ei]
+    t = np.clip(((P[vi] - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
+    c = a + t[:, None] * ab
+    d = np.hypot(P[vi, 0] - c[:, 0], P[vi, 1] - c[:, 1])
+    k = int(np.argmin(d))
+    i, j = sorted((int(ring[vi[k]]), int(ring[ei[k]])))
+    return float(d[k]), i, j
+
+
+def check_ring_gaps(outer: np.ndarray, holes: Sequence[np.ndarray], diameter: float, *,
+                    units: str = "m", scale: float = 1.0) -> None:
+    """Refuse a hole closer than :data:`MIN_GAP_FRACTION` × the diameter to the outer ring
+    or to another hole (rings and diameter in m; ``scale`` m per ``units`` for the message).
+
+    Raises
+    ------
+    PartError
+        Naming the hole(s) and the gap.
+    """
+    if not len(holes):
+        return
+    min_gap = MIN_GAP_FRACTION * diameter
+    found = ring_gap_pairs([outer, *holes], min_gap)
+    if found is None:
+        return
+    g, i, j = found
+    need = f"at least {min_gap / scale:.3g} {units}, {MIN_GAP_FRACTION:g} of the part's diameter"
+    if i == 0:
+        raise PartError(f"holes[{j - 1}]: only {g / scale:.3g} {units} from the outer ring ({need}, "
+                        "is needed to mesh it); move the hole away from the edge, or open it into "
+                        "the outer ring")
+    raise PartError(f"holes[{i - 1}] and holes[{j - 1}]: only {g / scale:.3g} {units} apart ({need}, "
+                    "is needed to mesh them); move them apart or merge them")
+
+
+# --------------------------------------------------------------------------- analyses
+def _factor_bytes(n_nodes: int) -> float:
+    n = max(int(n_nodes), 2)
+    return FACTOR_BYTES_PER_NLOGN * n * math.log2(n)
+
+
+def _averaging_nonzeros(n_triangles: int, area: float, ell: float) -> float:
+    """Non-zeros of the critical-distance averaging operator: every element with itself,
+    plus the element pairs whose centroids lie within ``ell`` (m) of each other."""
+    m = float(n_triangles)
+    if area <= 0 or ell <= 0:
+        return m
+    return m + m * m * math.pi * ell * ell / area
+
+
+def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_boundary: int,
+                         n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
+                         solvers: int = 1, plan: bool = False, n_axes: int = 0
+                         ) -> dict[str, float]:
+    """Peak memory (bytes) of an analysis, by part, from the sizes of its mesh.
+
+    Parameters
+    ----------
+    model : {"paper", "pads"}
+    n_nodes, n_triangles : int
+        Mesh size.
+    n_boundary : int
+        Nodes on all boundary loops (the condensation's size ``p``).
+    n_jaw_nodes : int, optional
+        Paper model: nodes whose pairs are the graph's vertices (outer loop, or every loop
+        when expanding). Default ``n_boundary``.
+    area : float
+        Part area (m²) and ``ell`` the critical distance (m), for the pads model.
+    solvers : int
+        Pads: number of factorised meshes held at once (2 with the noise-floor twin).
+    plan : bool
+        Paper model: include the planner's strain responses of every jaw node.
+    n_axes : int
+        Pads: grasp axes whose contact curves the release landscape keeps.
+
+    Returns
+    -------
+    dict
+        ``{"base", "mesh", "factorisation", "boundary", "landscape", "graph", "averaging",
+        "strains", "total"}`` (bytes). The total holds the base, mesh, factorisation and boundary
+        matrices, plus the largest of the transients (graph construction, strain
+        responses, averaging operator), which come one after another.
+    """
+    p = int(n_boundary)
+    q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
+    out = {"base": BASE_BYTES, "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
+           "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
+           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "strains": 0.0}
+    if model == "paper":
+        out["graph"] = PAPER_GRAPH_BYTES_PER_P2 * q * q
+        if plan:
+            out["strains"] = STRAIN_BYTES_PER_PM * q * n_triangles + STRAIN_BYTES_PER_PN * q * n_nodes
+    elif model == "pads":
+        k = max(float(solvers), 1.0)
+        out["mesh"] *= k
+        out["factorisation"] *= k
+        out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * k + PADS_WORK_BYTES_PER_P2) * p * p
+        out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
+        out["averaging"] = AVERAGING_BYTES_PER_NONZERO * _averaging_nonzeros(n_triangles, area, ell)
+    else:
+        raise ValueError(f"model = {model!r}: use 'paper' or 'pads'")
+    # The contact graph is built, the strain responses and the averaging operator are used,
+    # one after another: the largest of these transients adds to what stays.
+    transient = max(out["graph"], out["strains"], out["averaging"])
+    out["total"] = (out["base"] + out["mesh"] + out["factorisation"] + out["boundary"]
+                    + out["landscape"] + transient)
+    return out
+
+
+def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangles: int = 0,
+                    n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
+                    solvers: int = 1, plan: bool = True, n_axes: int = 0,
+                    what: str | None = None) -> dict[str, float]:
+    """Refuse an analysis whose boundary or estimated memory exceeds the limits.
+
+    Parameters
+    ----------
+    n_boundary : int
+        Boundary nodes of the mesh (all loops).
+    model : {"paper", "pads"}
+    n_nodes, n_triangles, n_jaw_nodes, area, ell, solvers, plan, n_axes
+        See :func:`estimate_model_bytes`.
+    what : str, optional
+        What the messages start with (default ``--model <model>``).
+
+    Returns
+    -------
+    dict
+        The estimate (bytes), see :func:`estimate_model_bytes`.
+
+    Raises
+    ------
+    GraspError
+        Above :data:`MAX_BOUNDARY_NODES_PAPER` / :data:`MAX_BOUNDARY_NODES_PADS` boundary
+        nodes, :data:`MAX_AVERAGING_NONZEROS`, or an estimate above :data:`MEMORY_BUDGET`.
+    """
+    q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
+    what = what or f"--model {model}"
+    if model == "paper" and q > MAX_BOUNDARY_NODES_PAPER:
+        raise GraspError(f"{what}: the mesh has {q:,} jaw nodes on its boundary, more than "
+                         f"the limit {MAX_BOUNDARY_NODES_PAPER:,} (the contact graph of all "
+                         f"{_fmt(q * (q - 1) / 2)} node pairs would need about "
+                         f"{PAPER_GRAPH_BYTES_PER_P2 * q * q / GB:.1f} GB); coarsen the boundary "
+                         "(larger max_area, fewer ring vertices) or use the pads model")
+    top = MAX_BOUNDARY_NODES_PADS
+    if model == "pads" and n_boundary > top:
+        dense = PADS_SOLVER_BYTES_PER_P2 * max(solvers, 1) * n_boundary**2
+        raise GraspError(f"{what}: the mesh has {n_boundary:,} boundary nodes, more than the "
+                         f"limit {top:,} (dense boundary compliances of {dense / GB:.1f} GB); "
+                         "coarsen the boundary (larger max_area, fewer ring vertices)")
+    if model == "pads":
+        nnz = _averaging_nonzeros(n_triangles, area, ell)
+        if nnz > MAX_AVERAGING_NONZEROS:
+            raise GraspError(f"{what}: averaging strains over the critical distance "
+                             f"({ell:.3g} m) on {n_triangles:,} triangles needs {_fmt(nnz)} "
+                             f"element pairs (limit {_fmt(MAX_AVERAGING_NONZEROS)}); coarsen "
+                             "the mesh (larger max_area) or give a smaller "
+                             "material.critical_distance")
+    est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,
+                               n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
+                               solvers=solvers, plan=plan, n_axes=n_axes)
+    if est["total"] > MEMORY_BUDGET:
+        part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base")),
+                         key=lambda kv: kv[1])
+        hint = {"strains": "restrict the pairs (--region, --min-sep/--max-sep) or coarsen the mesh",
+                "graph": "coarsen the boundary",
+                "landscape": "use a coarser grid (--grid-angles, --grid-offsets) or coarsen the "
+                             "boundary"}.get(part, "coarsen the mesh (larger max_area)")
+        raise GraspError(f"{what}: this analysis of a {n_nodes:,}-node mesh would need "
+                         f"about {est['total'] / GB:.1f} GB ({part}: {size / GB:.1f} GB), more "
+                         f"than {MEMORY_BUDGET / GB:.0f} GB; {hint}")
+    return est
+
+
+def check_model_size(mesh, model: str, *, mode: str = "contracting", plan: bool = False,
+                     solvers: int = 1, refine: int = 1, restricted: bool = False,
+                     n_axes: int = 0, what: str | None = None) -> dict[str, float]:
+    """:func:`check_plan_size` for a mesh: the single call the commands make before the
+    heavy work.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    model : {"paper", "pads"}
+    mode : {"contracting", "expanding"}
+        Paper model: expanding grasps pair the nodes of every loop.
+    plan : bool
+        Paper model: the planner (strain responses of every jaw node).
+    solvers : int
+        Pads: factorised meshes held at once (2 with the noise-floor twin).
+    refine : int
+        Pads ``--refine N`` (1..5): the finest of N meshes has about 4^(N−1) times the
+        triangles and 2^(N−1) times the boundary nodes.
+    restricted : bool
+        Paper planner restricted to some pairs (regions, separation range): the strain
+        responses are then checked by the planner itself once the pairs are known.
+    n_axes : int
+        Pads: grasp axes of the release landscape (a plan's grid; an optimize evaluates
+        part of its grid).
+    what : str, optional
+        What the messages start with (default ``--model <model>``).
+
+    Raises
+    ------
+    GraspError
+    """
+    loops = list(mesh.loops)
+    levels = int(refine) if isinstance(refine, (int, np.integer)) and 1 <= refine <= 5 else 1
+    f, g = 4 ** (levels - 1), 2 ** (levels - 1)
+    if levels > 1 and mesh.n_triangles * f > MAX_TRIANGLES:
+        raise GraspError(f"--refine {levels}: the finest mesh would have about "
+                         f"{_fmt(mesh.n_triangles * f)} triangles (limit {MAX_TRIANGLES:,}); use "
+                         "fewer meshes or a larger mesh.max_area")
+    n_b = sum(len(lp) for lp in loops) * g
+    jaw = None
+    if model == "paper":
+        jaw = len(loops[0]) * g if mode == "contracting" else n_b
+    ell = area = 0.0
+    if model == "pads":
+        from .pads.limit import critical_distance_of
+
+        ell = critical_distance_of(mesh)
+        area = float(mesh.areas.sum())
+    # --refine keeps every level's solvers: about 4/3 of the finest mesh's
+    k = solvers * (4.0 / 3.0 if levels > 1 else 1.0)
+    return check_plan_size(n_b, model, n_nodes=mesh.n_nodes * f, n_triangles=mesh.n_triangles * f,
+                           n_jaw_nodes=jaw, area=area, ell=ell, solvers=k,
+                           plan=plan and not restricted, n_axes=n_axes, what=what)
+
+
+def check_strain_responses(n_jaw_nodes: int, n_nodes: int, n_triangles: int,
+                           max_bytes: float | None = None) -> None:
+    """Refuse the paper planner's strain responses of ``n_jaw_nodes`` perimeter nodes when
+    they would not fit in what :data:`MEMORY_BUDGET` leaves after the model (or in
+    ``max_bytes``, if smaller).
+
+    Raises
+    ------
+    GraspError
+    """
+    need = STRAIN_BYTES_PER_PM * n_jaw_nodes * n_triangles + STRAIN_BYTES_PER_PN * n_jaw_nodes * n_nodes
+    room = MEMORY_BUDGET - BASE_BYTES - _factor_bytes(n_nodes) - MESH_BYTES_PER_TRIANGLE * n_triangles
+    if max_bytes is not None:
+        room = min(room, float(max_bytes))
+    if need > room:
+        raise GraspError(f"planning all pairs of this part needs {need / GB:.1f} GB for the strain "
+                         f"responses of {n_jaw_nodes:,} perimeter nodes ({max(room, 0) / GB:.1f} GB "
+                         "left); restrict the pairs (--region, --min-sep/--max-sep) or coarsen the "
+                         "mesh")
+
+
+def check_slice_size(resolution: int, n_fingers: int = 0, json_output: bool = False,
+                     field: str = "--resolution") -> None:
+    """Refuse a slice above :data:`MAX_SLICE_RESOLUTION` pixels per axis, or whose images
+    (and JSON text) would not fit in :data:`MEMORY_BUDGET`.
+
+    Raises
+    ------
+    DeformClosureError
+    """
+    if not (isinstance(resolution, (int, np.integer)) and 2 <= resolution <= MAX_SLICE_RESOLUTION):
+        raise DeformClosureError(f"{field} {resolution}: use 2..{MAX_SLICE_RESOLUTION:,} pixels "
+                                 "per axis")
+    px = float(resolution) ** 2
+    images = 2 + int(n_fingers)
+    need = BASE_BYTES + px * (8 + images)
+    if json_output:
+        need += px * (1 + images) * SLICE_JSON_BYTES_PER_VALUE
+    if need > MEMORY_BUDGET:
+        per = (8 + images) + ((1 + images) * SLICE_JSON_BYTES_PER_VALUE if json_output else 0)
+        top = int(math.sqrt((MEMORY_BUDGET - BASE_BYTES) / per))
+        raise DeformClosureError(f"{field} {resolution}: {resolution}² pixels with {n_fingers} "
+                                 f"fingers need about {need / GB:.1f} GB"
+                                 f"{' as JSON' if json_output else ''}; use {field} <= {top}"
+                                 f"{' or write .npz' if json_output else ''}")
+
+
+def limits_help(command: str) -> str:
+    """The limits paragraph of a command's ``--help`` (click ``\\b`` block)."""
+    mesh = (f"meshes: at most {MAX_TRIANGLES:,} triangles (estimated before meshing), narrow "
+            f"features at most {MAX_THIN_ELEMENTS:,} boundary elements, holes at least "
+            f"{MIN_GAP_FRACTION:g} x the diameter from other rings, at most {MAX_MESH_POINTS:,} "
+            "inserted points")
+    paper = (f"--model paper: at most {MAX_BOUNDARY_NODES_PAPER:,} jaw nodes on the boundary "
+             "(outer loop; every loop with --expanding)")
+    pads = (f"pads: at most {MAX_BOUNDARY_NODES_PADS:,} boundary nodes, "
+            f"{MAX_AVERAGING_NONZEROS / 1e6:.0f} million critical-distance element pairs, and a "
+            "memory estimate (mesh, grid, twin) within the budget")
+    lines = {
+        "mesh": [mesh],
+        "plan": [mesh, paper, pads],
+        "optimize": [mesh, paper, pads + "; with --refine N, for the finest mesh"],
+        "check": [mesh, f"at most {MAX_BOUNDARY_NODES_PADS:,} boundary nodes, "
+                  f"{MAX_AVERAGING_NONZEROS / 1e6:.0f} million critical-distance element pairs, "
+                  "and a memory estimate within the budget"],
+        "slice": [mesh, f"--resolution at most {MAX_SLICE_RESOLUTION:,} (less with many fingers "
+                  "and -o .json)"],
+    }[command]
+    import textwrap
+
+    body = "\n".join(textwrap.fill(ln, 86, initial_indent="  - ", subsequent_indent="    ")
+                     for ln in lines)
+    return (f"\b\nLimits (every maximum runs within {MEMORY_BUDGET / GB:.0f} GB; larger requests "
+            f"are refused before the work):\n{body}\n")
