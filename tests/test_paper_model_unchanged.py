@@ -10,6 +10,12 @@ Documented changes since (each a fix whose reason is in the commit that made it)
 - ``paper_c_shape``: ``mesh.graph_edges`` 10615 → 10617 — swing arcs no longer register a
   hit at the moving jaw's own node (issue 12): swing edges {1,5}–{1,3} and {1,5}–{1,65}
   added, {1,5}–{1,167} now a slide edge only; σ*, Q, U_A, U_L unchanged.
+- ``paper_plan_c_shape``: the plan honours any ε per pair (issue 12): new keys
+  (``guarantee``, ``settled_counts``, ``allow_pulling``, ``top_excludes_pulling``,
+  ``n_evaluations``; per pair ``quality_upper``, ``settled``, ``jaw_positions``; ``pulls``
+  in ``top``), and pair (98, 188) — whose lattice value 2.25e-8 J was below its exact
+  optimum 8.72e-8 J, though within ε — now reads 3.25e-8 J and ranks above (16, 71).
+  Every other number is identical.
 """
 
 from __future__ import annotations

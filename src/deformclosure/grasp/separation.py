@@ -62,6 +62,8 @@ algorithm), §4.7 (ε-approximation).
 from __future__ import annotations
 
 import math
+import threading
+import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -402,15 +404,47 @@ def _tie_kinks(P: _Problem) -> np.ndarray:
     return flag
 
 
+#: Per contact graph, the crossings of all adjacent curves on the whole line and the
+#: tie-kink flags of its last two curve sets (see :func:`_graph_events`).
+_GRAPH_EVENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_GRAPH_EVENTS_LOCK = threading.Lock()
+
+
+def _graph_events(P: _Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Crossings of every pair of adjacent curves (all of them, any separation) and the
+    tie-kink flags of :func:`_tie_kinks`.
+
+    They depend on the graph and the curves ``(x0, k)`` only, not on the start or the
+    range, so one computation serves every jaw pair of a part (a plan, or a loop over
+    pairs); each call filters them to its range, which gives the very arrays
+    ``adjacent_crossings(x0, k, edges, lo, hi)`` returns (same elementwise arithmetic,
+    same order). Kept per graph object (weakly) for its last two curve sets.
+    """
+    with _GRAPH_EVENTS_LOCK:
+        entries = _GRAPH_EVENTS.get(P.graph, [])
+        for x0, k, xs, pairs, tie in entries:
+            if np.array_equal(x0, P.x0) and np.array_equal(k, P.k):
+                return xs, pairs, tie
+    xs, pairs = pc.adjacent_crossings(P.x0, P.k, P.graph.edges, -np.inf, np.inf)
+    tie = _tie_kinks(P)
+    with _GRAPH_EVENTS_LOCK:
+        _GRAPH_EVENTS[P.graph] = [(P.x0.copy(), P.k.copy(), xs, pairs, tie),
+                                  *_GRAPH_EVENTS.get(P.graph, [])][:2]
+    return xs, pairs, tie
+
+
 def _static_breakpoints(P: _Problem) -> pc.EventTable:
     """Where ``U_A`` can jump: adjacent-vertex crossings and tie-creating kinks, merged.
 
     These are the only separations where the set of equilibrium vertices, or whether
     the start is a strict minimum, can change.  The ends of the range are included.
     """
-    xs, pairs = pc.adjacent_crossings(P.x0, P.k, P.graph.edges, P.lo, P.hi)
+    xs_all, pairs_all, tie = _graph_events(P)
+    with np.errstate(invalid="ignore"):
+        inside = (xs_all >= P.lo) & (xs_all <= P.hi)
+    xs, pairs = xs_all[inside], pairs_all[inside]
     kx, kv = pc.kinks_in(P.x0, P.lo, P.hi)
-    keep = _tie_kinks(P)[kv]
+    keep = tie[kv]
     return pc.merge_breakpoints(xs, pairs, kx[keep], kv[keep], P.lo, P.hi, P.tol_x)
 
 

@@ -2131,8 +2131,11 @@ def result_summary(result: dict | None) -> dict:
     pairs = result.get("pairs")
     if isinstance(pairs, list):
         out["n_pairs"] = len(pairs)
-        if pairs and isinstance(pairs[0], dict):
-            top = pairs[0]
+        # the plan's proposal: its `top` list (pulling pairs excluded), else the best row
+        ranked = result.get("top") if isinstance(result.get("top"), list) and result["top"] \
+            else pairs
+        if ranked and isinstance(ranked[0], dict):
+            top = ranked[0]
             out.update(top_a=_node(top.get("a")), top_b=_node(top.get("b")),
                        top_sigma_star=_typed("sigma_star", top.get("sigma_star")),
                        top_quality=_typed("quality", top.get("quality")))
@@ -2188,6 +2191,8 @@ def _csv_figures(result: Any) -> dict:
         out.update(axis_x_m=x, axis_y_m=y, axis_angle_rad=angle if _is_num(angle) else None)
     for kind in ("axes", "pairs"):                                 # a plan: the best grasp
         best = result.get(kind)
+        if kind == "pairs" and isinstance(result.get("top"), list) and result["top"]:
+            best = result["top"]                        # paper plans: pulling pairs excluded
         if isinstance(best, list) and best and isinstance(best[0], dict):
             top = best[0]
             point = _xy(top.get("point"))

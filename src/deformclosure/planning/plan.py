@@ -1,23 +1,55 @@
-"""Grasp planning: the ε-optimal separation and quality of every jaw pair at once.
+"""Grasp planning: every jaw pair's optimal separation and quality, each within ε.
 
 For every pair ``s`` of perimeter nodes the quality is ``Q_s(σ) = min(U_A(s, σ),
-U_L(s, σ))`` on ``[σ_L(s), σ0(s)]`` (contracting; SPEC §4). Evaluating each pair with
-its own ε-approximation repeats the same work: at a given σ the vertex energies do not
-depend on the start, and one union–find sweep over the vertices in energy order gives
-the release energy of *every* vertex (:func:`~deformclosure.grasp.release.release_energies`).
-So the planner samples one σ lattice shared by all pairs — the paper's ε-grid (§4.7)
-``σ_j = j·ξ``, ``ξ = ε/λ``, ``λ = max_v k_v σ0_v`` — does one sweep per lattice value,
-and keeps, per pair, the best lattice value inside its own range. This equals the
-paper's ε-approximation of each pair on the same lattice
-(``optimize_separation_arrays(method="approx", grid="lattice", lipschitz=λ)``); the
-``top`` pairs are then refined with the exact method.
+U_L(s, σ))`` on ``[σ_L(s), σ0(s)]`` (contracting; SPEC §4). The planner reports, for
+*every* pair, a quality ``Q`` that was attained (a lower bound of the pair's optimum
+``Q*``) and a proven upper bound ``Q⁺`` with ``Q ≤ Q* ≤ Q⁺ ≤ Q + ε``; the ranking by
+``Q`` is therefore correct up to ε. It does so in three steps.
+
+1. **Where Q can be positive — exactly, for all pairs.** ``U_A(s, σ) > 0`` only where
+   ``s`` is a strict local minimum (``U_s < U_w`` for all its neighbours ``w``). That
+   order changes only where ``U_s`` crosses a neighbour's curve, so the *strict spans*
+   of every pair follow from its O(degree) adjacent crossings and one comparison per
+   span. A pair with no strict span has ``Q ≡ 0`` (settled ``"zero"``): typically
+   98–99 % of all pairs, certified without sampling.
+2. **A coarse shared lattice.** The paper's lattice ``σ_j = j·ξ`` (§4.7) is swept for
+   all pairs at once (one union–find sweep per σ gives every pair's ``U_A``,
+   :func:`~deformclosure.grasp.release.release_energies`), ``ξ = ε/λ`` with the global
+   ``λ = max k_v σ0_v``, but never more than about ``n_sigma`` values: a fine ε is
+   reached in step 3, not by a finer shared lattice. ``lattice_quality`` is its value.
+3. **Per-pair bounds, refined where they can still change the answer.** On a strict
+   span ``Q = G − U_s`` with ``G = min(B, C)``, ``B`` the minimax escape level and
+   ``C = U_s(σ_L)``. No vertex energy rises with σ (contracting frame), so if an
+   equilibrium ``e`` stays reachable on a cell ``[x, y]`` — its energy is 0, or it has no
+   adjacent crossing in the cell, or descending from it can never reach ``s`` — the
+   minimax path ``P`` from ``s`` to ``e`` at ``x`` bounds the escape on the whole cell,
+   jumps of ``U_A`` included: ``B(σ) ≤ max_{v∈P} U_v(σ)``. The supremum over the cell
+   of ``max_{v∈P} min(U_v, C) − U_s`` (piecewise quadratic, closed form) is the cell's
+   bound — exact where ``P`` is the escape path of the whole cell, with a slack of the
+   order of the pair's own energy change ``U_s(x) − U_s(y) ≤ k_s σ0_s (y − x)``
+   otherwise, not of the global λ. The jumps that matter are only those of the
+   equilibria the pair's escape uses, not every adjacent crossing (the jump-safe pieces
+   of ``optimize --method approx``). Per pair, a branch and bound splits the cells whose
+   bound exceeds ``best + ε`` where the bound peaks (:func:`_settle_pair`); a pair that
+   does not settle within its budget of searches is solved by the exact method
+   (``"exact"``), like the ``top`` pairs and the pairs whose curve agrees with a
+   neighbour's to rounding (mirror images on a symmetric mesh).
+
+Tolerances are the exact method's, per pair (breakpoints closer than ``1e-12 ×`` the
+pair's separation scale are one), so the guarantee holds to rounding.
 
 ``e_max`` and ``σ_L`` of every pair come from the strain response to unit forces at
 the perimeter DOFs (one block solve with the factorisation already built).
+
+References
+----------
+K. Gopalakrishnan and K. Goldberg, "D-Space and Deform Closure Grasps of Deformable
+Parts", IJRR 24(11), 2005, §4.5–4.7.
 """
 
 from __future__ import annotations
 
+import heapq
 import math
 import os
 import time
@@ -27,16 +59,23 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
 from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
+from ..grasp import pieces as pc
+from ..grasp._kernels import _heap_pop, _heap_push
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.release import release_energies
-from ..grasp.separation import lipschitz_constant, vertex_energies
+from ..grasp.separation import lipschitz_constant, optimize_separation_arrays, vertex_energies
 from ..units import SI_UNITS
 
-__all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice"]
+__all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice", "SETTLED"]
 
+#: How a row of a plan was settled: ``"zero"`` (never a strict minimum: Q ≡ 0, exact),
+#: ``"bounds"`` (sampled quality with a proven upper bound within ε), ``"exact"``
+#: (the exact method of ``optimize --method exact``).
+SETTLED = ("zero", "bounds", "exact")
 
 
 def _workers() -> int:
@@ -48,36 +87,432 @@ def _workers() -> int:
     return max(1, min(n, 8))
 
 
+# --------------------------------------------------------------------------- kernels
+# Contracting frame throughout (x = σ, or x = −σ for expanding grasps, as in
+# deformclosure.grasp.pieces): vertex v has the energy ½ k_v (x0_v − x)² for x < x0_v.
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _e(x0v, kv, x):  # pragma: no cover - compiled
+    d = x0v - x
+    return 0.5 * kv * d * d if d > 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True)
+def _k_strict_spans(indptr, indices, x0, k, verts, lo, hi, cr_ptr, cr_x, tols,
+                    out_i, out_a, out_b, out_ao, out_bo):  # pragma: no cover - compiled
+    """Open spans of ``[lo_i, hi_i]`` where vertex ``verts[i]`` is a strict minimum.
+
+    Strictness (``U_s < U_w`` for every neighbour ``w``) changes only at crossings of
+    ``U_s`` with a neighbour's curve, listed in ``cr_x[cr_ptr[s]:cr_ptr[s + 1]]``;
+    one comparison at the middle of each piece between them decides it. Pieces not
+    longer than the pair's tolerance ``tols[i]`` (the exact method's: crossings closer
+    than it are one breakpoint) are skipped. A span end is
+    *open* (``out_ao``/``out_bo``) when it is such a crossing, closed when it is an end
+    of the range. Returns the number of spans written.
+    """
+    n = 0
+    for i in range(verts.shape[0]):
+        s = verts[i]
+        a0 = lo[i]
+        b0 = hi[i]
+        tol = tols[i]
+        if b0 - a0 <= 4.0 * tol:
+            continue
+        c0 = cr_ptr[s]
+        c1 = cr_ptr[s + 1]
+        j0 = c0 + np.searchsorted(cr_x[c0:c1], a0 - tol)
+        j1 = c0 + np.searchsorted(cr_x[c0:c1], b0 + tol, side="right")
+        prev = a0
+        prev_open = False
+        for j in range(j0, j1 + 1):
+            if j < j1:
+                cur = min(max(cr_x[j], a0), b0)
+                cur_open = True
+            else:
+                cur = b0
+                cur_open = False
+            if cur - prev > tol:
+                m = 0.5 * (prev + cur)
+                es = _e(x0[s], k[s], m)
+                strict = True
+                for q in range(indptr[s], indptr[s + 1]):
+                    w = indices[q]
+                    if _e(x0[w], k[w], m) <= es:
+                        strict = False
+                        break
+                if strict:
+                    out_i[n] = i
+                    out_a[n] = prev
+                    out_b[n] = cur
+                    out_ao[n] = prev_open
+                    out_bo[n] = cur_open
+                    n += 1
+            prev = cur
+            prev_open = cur_open
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _k_drains_to(indptr, indices, x0, k, e, level, y, s, seen, stack,
+                 epoch):  # pragma: no cover - compiled
+    """Whether ``s`` lies in the component of ``e`` in ``{v : U_v(y) ≤ level}``."""
+    top = 1
+    stack[0] = e
+    seen[e] = epoch
+    while top > 0:
+        top -= 1
+        v = stack[top]
+        for q in range(indptr[v], indptr[v + 1]):
+            w = indices[q]
+            if seen[w] != epoch and _e(x0[w], k[w], y) <= level:
+                if w == s:
+                    return True
+                seen[w] = epoch
+                stack[top] = w
+                top += 1
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, done, best, pred,
+              hk, hv, bseen, stack, epoch):  # pragma: no cover - compiled
+    """Escape levels of start ``s`` at separation ``x``: ``(strict, B, B_stable, path)``.
+
+    The minimax search of :func:`deformclosure.grasp._kernels.bottleneck_escape` (a
+    path's cost is its largest vertex energy), with the energies computed on the fly so
+    that its work is the explored basin, not the graph. ``B`` is the level of the first
+    equilibrium ``e ≠ s`` it settles — the release level, ``U_A = B − U_s`` when ``s`` is
+    a strict minimum (``strict``).
+
+    The search goes on to the first equilibrium ``e`` that keeps an equilibrium other
+    than ``s`` within reach for every separation in ``[x, y]``: ``U_e(x) = 0`` (energy 0
+    is never left), or no adjacent crossing of ``e`` in ``[wlo, whi]`` (``e`` stays an
+    equilibrium), or ``s`` outside the component of ``e`` in ``{v : U_v(y) ≤ U_e(x)}``
+    (descending from ``e`` at any σ of the cell never reaches ``s``, so it ends at
+    another equilibrium). Its level is ``B_stable ≥ B`` (J), and along the minimax path
+    ``path`` (vertices, ``s`` first) to it ``B(σ) ≤ max_{v ∈ path} U_v(σ)`` for every σ
+    of the cell, since no energy rises with σ. ``inf`` and an empty path where none is
+    reachable. ``seen``/``done``/``best``/``pred``/``bseen`` are workspaces stamped
+    with ``epoch``.
+    """
+    us = _e(x0[s], k[s], x)
+    strict = True
+    for q in range(indptr[s], indptr[s + 1]):
+        w = indices[q]
+        if _e(x0[w], k[w], x) <= us:
+            strict = False
+            break
+    first = np.inf
+    size = 0
+    best[s] = us
+    seen[s] = epoch
+    pred[s] = -1
+    size = _heap_push(hk, hv, size, us, s)
+    target = -1
+    level = np.inf
+    while size > 0:
+        d = hk[0]
+        v = hv[0]
+        size = _heap_pop(hk, hv, size)
+        if done[v] == epoch:
+            continue
+        done[v] = epoch
+        if v != s:
+            uv = _e(x0[v], k[v], x)
+            eq = True
+            for q in range(indptr[v], indptr[v + 1]):
+                w = indices[q]
+                if _e(x0[w], k[w], x) < uv:
+                    eq = False
+                    break
+            if eq:
+                if d < first:
+                    first = d
+                stable = uv == 0.0
+                if not stable:
+                    c0 = cr_ptr[v]
+                    c1 = cr_ptr[v + 1]
+                    i0 = np.searchsorted(cr_x[c0:c1], wlo)
+                    i1 = np.searchsorted(cr_x[c0:c1], whi, side="right")
+                    stable = i1 == i0
+                if not stable:
+                    stable = not _k_drains_to(indptr, indices, x0, k, v, uv * (1.0 + 1e-12), y,
+                                              s, bseen, stack, epoch)
+                if stable:
+                    target = v
+                    level = d
+                    break
+        for q in range(indptr[v], indptr[v + 1]):
+            w = indices[q]
+            if done[w] == epoch:
+                continue
+            uw = _e(x0[w], k[w], x)
+            nd = d if d >= uw else uw
+            if seen[w] != epoch or nd < best[w]:
+                seen[w] = epoch
+                best[w] = nd
+                pred[w] = v
+                size = _heap_push(hk, hv, size, nd, w)
+    n = 0
+    v = target
+    while v != -1:
+        n += 1
+        v = pred[v]
+    path = np.empty(n, np.int64)
+    v = target
+    for i in range(n - 1, -1, -1):
+        path[i] = v
+        v = pred[v]
+    return strict, first, level, path
+
+
+@njit(cache=True, nogil=True)
+def _k_path_bound(path, x0, k, s, C, x, y):  # pragma: no cover - compiled
+    """``sup`` over ``[x, y]`` of ``max_{v ∈ path} min(U_v, C) − U_s`` and where (J, m).
+
+    Each term is piecewise quadratic in σ: its supremum lies at an end, at the
+    stationary point of ``U_v − U_s``, where ``U_v = C`` or at the kink ``x0_v``. An
+    empty path (no equilibrium reachable) gives ``U_L(y) = C − U_s(y)``.
+    """
+    if path.shape[0] == 0:
+        return C - _e(x0[s], k[s], y), y
+    top = -np.inf
+    arg = x
+    cand = np.empty(5)
+    for i in range(path.shape[0]):
+        v = path[i]
+        if v == s:
+            continue
+        cand[0] = x
+        cand[1] = y
+        dk = k[v] - k[s]
+        cand[2] = (k[v] * x0[v] - k[s] * x0[s]) / dk if dk != 0.0 else x
+        cand[3] = x0[v] - np.sqrt(2.0 * C / k[v]) if C > 0.0 else x
+        cand[4] = x0[v]
+        for j in range(5):
+            c = cand[j]
+            if not (c >= x and c <= y):
+                continue
+            val = min(_e(x0[v], k[v], c), C) - _e(x0[s], k[s], c)
+            if val > top:
+                top = val
+                arg = c
+    return top, arg
+
+
+class _Workspace:
+    """Graph arrays, per-vertex crossing lists and reusable search buffers of one plan."""
+
+    def __init__(self, graph, x0: np.ndarray, k: np.ndarray, cr_ptr: np.ndarray,
+                 cr_x: np.ndarray, tol: float):
+        self.all_x = np.sort(cr_x)
+        self.indptr = np.ascontiguousarray(graph.indptr, dtype=np.int64)
+        self.indices = np.ascontiguousarray(graph.indices, dtype=np.int64)
+        self.x0 = np.ascontiguousarray(x0, dtype=float)
+        self.k = np.ascontiguousarray(k, dtype=float)
+        self.cr_ptr, self.cr_x, self.tol = cr_ptr, cr_x, float(tol)
+        V = len(self.x0)
+        self.seen = np.full(V, -1, np.int64)
+        self.done = np.full(V, -1, np.int64)
+        self.best = np.empty(V)
+        self.pred = np.empty(V, np.int64)
+        self.bseen = np.full(V, -1, np.int64)
+        self.stack = np.empty(V, np.int64)
+        self.hk = np.empty(self.indices.shape[0] + 1)
+        self.hv = np.empty(self.indices.shape[0] + 1, np.int64)
+        self.epoch = 0
+        self.n_eval = 0
+
+    def crossings_near(self, x: float, tol: float) -> tuple[bool, float]:
+        """Whether some adjacent crossing lies within ``tol`` of ``x``, and the first one
+        after ``x + tol`` (``inf`` if none)."""
+        i0, i1 = np.searchsorted(self.all_x, [x - tol, x + tol], side="right")
+        return bool(i1 > i0), (float(self.all_x[i1]) if i1 < len(self.all_x) else math.inf)
+
+    def escape(self, s: int, x: float, y: float,
+               tol: float) -> tuple[bool, float, float, np.ndarray]:
+        """``(strict, B, B_stable, path)`` at ``x``, stability over ``[x, y]`` (see
+        :func:`_k_escape`)."""
+        self.epoch += 1
+        self.n_eval += 1
+        return _k_escape(self.indptr, self.indices, self.x0, self.k, s, x, y, self.cr_ptr,
+                         self.cr_x, x - tol, y - tol, self.seen, self.done,
+                         self.best, self.pred, self.hk, self.hv, self.bseen, self.stack,
+                         self.epoch)
+
+
+def _crossing_lists(x0: np.ndarray, k: np.ndarray, edges: np.ndarray, lo: float, hi: float,
+                    V: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """Every adjacent crossing in ``[lo, hi]``, listed under both of its vertices (CSR,
+    positions sorted per vertex)."""
+    xs, prs = pc.adjacent_crossings(x0, k, edges, lo, hi)
+    owner = np.concatenate([prs[:, 0], prs[:, 1]]).astype(np.int64)
+    pos = np.concatenate([xs, xs])
+    order = np.lexsort((pos, owner))
+    cr_x = np.ascontiguousarray(pos[order])
+    cr_ptr = np.concatenate([[0], np.cumsum(np.bincount(owner, minlength=V))]).astype(np.int64)
+    return cr_ptr, cr_x, len(xs)
+
+
+@dataclass
+class _PairOutcome:
+    Q: float              # best sampled quality (J), a lower bound of Q*
+    x: float              # where (contracting frame), NaN if Q = 0
+    B: float              # release level there (J), inf if unreachable
+    upper: float          # proven upper bound of Q* (J)
+    ok: bool              # settled within ε by bounds
+
+
+def _settle_pair(ws: _Workspace, s: int, C: float, eps: float, lam: float, tol: float,
+                 spans: list[tuple[float, float, bool, bool]], lat_x: np.ndarray,
+                 max_evals: int) -> _PairOutcome:
+    """Branch and bound for one pair on its strict spans (contracting frame).
+
+    A cell ``[x, y]`` of a strict span is bounded by the supremum over the cell of
+    ``max_{v ∈ P} min(U_v, C) − U_s`` (:func:`_k_path_bound`), ``P`` the minimax path at
+    ``x`` to an equilibrium that stays reachable on the whole cell (:func:`_k_escape`):
+    ``B(σ) ≤ max_{v ∈ P} U_v(σ)`` there, jumps of ``U_A`` included. Where ``P`` is the
+    escape path of the whole cell the bound is the cell's exact supremum. Cells whose
+    bound exceeds ``best + ε`` are split where their bound peaks, best bound first.
+
+    A bound that peaks at the left end ``x`` means the escape just after ``x`` differs
+    from the one at ``x``: the left end is re-searched on the shorter cell. When a
+    crossing sits at ``x`` itself (within the tolerance ``tol`` of the breakpoints), the
+    next sample goes just past it, at ``m``, and the sliver ``(x, m]`` holds no
+    crossing, so there ``G`` is continuous and ``Q ≤ Q(m) + λ (m − x)``, ``λ`` (N) the
+    largest slope of any vertex energy.
+
+    ``lat_x``: shared lattice separations inside the pair's range, the first samples.
+    Returns the best sampled quality and the upper bound of ``sup Q``; ``ok`` is False
+    when the budget ``max_evals`` (escape searches) ran out, or a cell became too
+    narrow to split.
+    """
+    x0, k = ws.x0, ws.k
+    x0s, ks = float(x0[s]), float(k[s])
+    best = [0.0, math.nan, math.nan]            # Q, x, B
+    start_evals = ws.n_eval
+
+    delicate = [False]
+
+    def evaluate(x: float, y: float, sample: bool = True) -> tuple[np.ndarray, float]:
+        """Record Q(x) (if ``sample``); return the path that bounds G on [x, y], Q(x).
+
+        A sample inside a strict span that is not a strict minimum means that ``U_s`` and
+        a neighbour's curve agree to rounding (mirror-image pairs on a symmetric mesh):
+        sampled energies cannot settle such a pair; the exact method does.
+        """
+        strict, B, _Bst, path = ws.escape(s, x, y, tol)
+        Q = 0.0
+        if strict:
+            d = x0s - x
+            Q = (B if B < C else C) - (0.5 * ks * d * d if d > 0.0 else 0.0)
+            if sample and Q > best[0]:
+                best[0], best[1], best[2] = Q, x, B
+        elif sample:
+            delicate[0] = True
+        return path, Q
+
+    heap: list = []
+    done_ub = 0.0
+    counter = 0
+
+    def push(x: float, y: float, path: np.ndarray, cap: float = math.inf) -> None:
+        nonlocal done_ub, counter
+        b, arg = _k_path_bound(path, x0, k, s, C, x, y)
+        b = min(b, cap)
+        if b <= best[0] + eps:
+            done_ub = max(done_ub, b)
+        else:
+            counter += 1
+            heapq.heappush(heap, (-b, counter, x, y, path, arg, cap))
+
+    for a, b, ao, bo in spans:
+        j0, j1 = np.searchsorted(lat_x, [a + 2 * tol, b - 2 * tol])
+        pts = [a, *(float(v) for v in lat_x[j0:j1]), b]
+        for i in range(len(pts) - 1):
+            push(pts[i], pts[i + 1], evaluate(pts[i], pts[i + 1], sample=(i > 0 or not ao))[0])
+        if not bo:                                   # the closed end σ0 of the range,
+            strict, B, _Bst, _p = ws.escape(s, b, b, tol)   # a tie at 0 is no surprise
+            if strict and min(B, C) > best[0]:
+                best[0], best[1], best[2] = min(B, C), b, B
+    while (heap and -heap[0][0] > best[0] + eps and ws.n_eval - start_evals < max_evals
+           and not delicate[0]):
+        item = heapq.heappop(heap)
+        _, _, x, y, path, arg, cap = item
+        w = y - x
+        if math.isfinite(cap):                       # a sliver: nothing left to split
+            heapq.heappush(heap, item)
+            break
+        if arg > x:
+            m = min(max(arg, x + 0.125 * w), y - 0.125 * w)   # where the bound peaks
+            if not (x + 2 * tol < m < y - 2 * tol):   # too narrow to split: give up
+                heapq.heappush(heap, item)
+                break
+            push(x, m, path)                         # P stays valid on the left part
+            push(m, y, evaluate(m, y)[0])
+            continue
+        lo_c, c_next = ws.crossings_near(x, tol)
+        if not lo_c:                                 # re-search x on a shorter cell
+            m = 0.5 * (x + y)
+            if not (x + 2 * tol < m < y - 2 * tol):
+                heapq.heappush(heap, item)
+                break
+            push(x, m, evaluate(x, m, sample=False)[0])
+            push(m, y, evaluate(m, y)[0])
+            continue
+        m = min(x + 32 * tol, 0.5 * (x + tol + c_next), 0.5 * (x + y))
+        if not (x + 2 * tol < m < y - 2 * tol):
+            heapq.heappush(heap, item)
+            break
+        path_m, Qm = evaluate(m, y)
+        push(x, m, path, cap=Qm + lam * (m - x))     # no crossing in (x + tol, m]
+        push(m, y, path_m)
+    upper = max(best[0], done_ub, -heap[0][0] if heap else 0.0)
+    ok = (not heap or -heap[0][0] <= best[0] + eps) and not delicate[0]
+    return _PairOutcome(best[0], best[1], best[2], upper, ok)
+
+
 @dataclass(frozen=True)
 class PlanResult:
-    """Quality of every jaw pair, ranked (SI units).
+    """Quality of every jaw pair, each within ε of its optimum, ranked (SI units).
 
     Attributes
     ----------
     pairs : ndarray, shape (P, 2)
         Jaw node pairs considered (after the filters), in ranking order (best first).
+    jaw_xy : ndarray, shape (P, 2, 2)
+        Rest coordinates of the two jaw nodes of each pair (m).
     sigma0, k, e_max, sigma_L : ndarray, shape (P,)
         Rest distance (m), stiffness (N/m), strain per unit distance change (1/m) and
         elastic-limit separation (m) of each pair.
     sigma_star : ndarray, shape (P,)
-        ε-optimal separation (m), NaN where the pair cannot hold (Q ≡ 0 on the lattice);
-        the exact ``σ*`` for the refined pairs.
+        Separation where ``quality`` is attained (m), NaN where it is 0; the exact ``σ*``
+        for the pairs settled by the exact method.
     quality, U_A, U_L : ndarray, shape (P,)
-        Q, release energy (``inf`` possible) and elastic margin at ``sigma_star`` (J):
-        the lattice values, replaced by the exact ones for the ``top`` refined pairs
-        (whose exact optimum is never below their lattice value, so the order holds).
+        Q, release energy (``inf`` possible) and elastic margin at ``sigma_star`` (J).
+        ``quality ≤ Q* ≤ quality_upper ≤ quality + epsilon`` for every pair.
+    quality_upper : ndarray, shape (P,)
+        Proven upper bound of the pair's optimum ``Q*`` (J).
+    settled : ndarray of str, shape (P,)
+        How each row was settled, one of :data:`SETTLED`.
     lattice_quality : ndarray, shape (P,)
-        Q on the shared lattice for every pair (J), refined or not.
+        Best Q on the coarse shared lattice (J), a lower bound.
     exact : ndarray of bool, shape (P,)
         The pair's values come from the exact method.
     pulls : ndarray of bool, shape (P,)
-        The jaw line leaves the part at a jaw.
+        The jaw line leaves the part at a jaw (the jaw would have to pull).
     epsilon, lipschitz, step : float
-        ε (J), λ (N) and ξ = ε/λ (m) of the shared lattice.
+        ε (J) of the guarantee, global λ (N) and step ξ (m) of the shared lattice.
     n_sigma : int
-        Number of lattice values (one all-vertices sweep each).
+        Number of shared lattice values (one all-vertices sweep each).
     refined : list of GraspAnalysis
-        The ``top`` pairs re-optimised with the exact method.
+        The ``top`` pairs (without pulling pairs unless ``allow_pulling``), re-optimised
+        with the exact method, best first.
+    allow_pulling : bool
+        Whether pulling pairs may enter ``refined``.
+    n_evaluations : int
+        Escape-level evaluations of the per-pair refinement.
     mode : str
     jaw_width : float
     timings : dict
@@ -104,6 +539,16 @@ class PlanResult:
     jaw_width: float = 0.0
     timings: dict = field(default_factory=dict)
     model: GraspModel | None = None
+    quality_upper: np.ndarray | None = None
+    settled: np.ndarray | None = None
+    jaw_xy: np.ndarray | None = None
+    allow_pulling: bool = False
+    n_evaluations: int = 0
+
+    def settled_counts(self) -> dict[str, int]:
+        """Number of rows settled each way (keys of :data:`SETTLED`)."""
+        s = self.settled if self.settled is not None else np.array([], dtype=str)
+        return {key: int(np.sum(s == key)) for key in SETTLED}
 
     def to_dict(self) -> dict[str, Any]:
         """JSON report (SPEC §5 "Plan report"); SI units, infinities as ``None``."""
@@ -123,14 +568,21 @@ class PlanResult:
                 "pulls": bool(self.pulls[i]),
                 "method": "exact" if self.exact[i] else "approx-lattice",
                 "lattice_quality": float(self.lattice_quality[i]),
+                "quality_upper": float(self.quality_upper[i]),
+                "settled": str(self.settled[i]),
+                "jaw_positions": self.jaw_xy[i].tolist(),
             })
+        nodes = self.model.mesh.nodes if self.model is not None else None
         top = []
         for r in self.refined:
             d = r.to_dict()
             top.append({"a": int(r.jaws[0]), "b": int(r.jaws[1]),
                         **{k: d[k] for k in ("sigma_star", "quality", "U_A", "U_A_infinite",
                                              "U_L", "sigma_L", "sigma0", "k01", "e_max",
-                                             "method", "attained")}})
+                                             "method", "attained")},
+                        "pulls": bool(d["pulls"]),
+                        "jaw_positions": (nodes[list(r.jaws)].tolist() if nodes is not None
+                                          else d["jaw_positions"])})
         return {
             "model": "paper",
             "pairs": rows,
@@ -145,6 +597,18 @@ class PlanResult:
             "energy_model": "linear",
             "units": dict(SI_UNITS),
             "timings_s": dict(self.timings),
+            "guarantee": {
+                "epsilon": float(self.epsilon),
+                "rows": "every row: quality <= Q* <= quality_upper <= quality + epsilon "
+                        "(to rounding), Q* = the pair's optimal quality (the supremum of "
+                        "the exact method)",
+                "ranking": "rows sorted by quality: a pair ranked below another has "
+                           "Q* at most epsilon above the other's Q*",
+            },
+            "settled_counts": self.settled_counts(),
+            "allow_pulling": bool(self.allow_pulling),
+            "top_excludes_pulling": not self.allow_pulling,
+            "n_evaluations": int(self.n_evaluations),
         }
 
 
@@ -189,11 +653,9 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     ptr = np.concatenate([[0], np.cumsum(counts)])
     nodes_used, pos = np.unique(loaded, return_inverse=True)
     q = len(nodes_used)
-    need = 8.0 * mesh.n_triangles * 3 * q * 2 + 8.0 * 2 * mesh.n_nodes * 2 * q
-    if need > max_bytes:
-        raise GraspError(f"planning all pairs of this part needs {need / 1e9:.1f} GB for the strain "
-                         f"responses of {q} perimeter nodes; restrict the pairs (regions, separation "
-                         f"range) or coarsen the perimeter")
+    from ..limits import check_strain_responses
+
+    check_strain_responses(q, mesh.n_nodes, mesh.n_triangles, max_bytes)   # before T is built
     n2 = 2 * mesh.n_nodes
     E = np.zeros((n2, 2 * q))
     E[2 * nodes_used, 2 * np.arange(q)] = 1.0
@@ -281,9 +743,11 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
                 mode: str = "contracting", jaw_width: float = 0.0,
                 separation_range: tuple[float, float] | None = None,
                 regions: Sequence[Any] | None = None, top: int = 10,
-                n_sigma: int = 400, max_sigma: int = 200_000, progress: Callable[[int, int], None] | None = None,
-                model: GraspModel | None = None) -> PlanResult:
-    """Rank every jaw pair of a part by its ε-optimal quality.
+                n_sigma: int = 400, max_sigma: int = 200_000,
+                progress: Callable[[int, int], None] | None = None,
+                model: GraspModel | None = None, allow_pulling: bool = False,
+                max_evaluations: int = 4000) -> PlanResult:
+    """Rank every jaw pair of a part, each pair's quality within ε of its optimum.
 
     Parameters
     ----------
@@ -292,8 +756,9 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     K : sparse matrix, optional
         Stiffness (N/m); assembled if omitted.
     eps : float, optional
-        ε (J) of the shared lattice; default: the value giving about ``n_sigma``
-        lattice points over the range of all selected pairs (reported).
+        ε (J): every reported quality is within ε of the pair's optimum. Default: the
+        value giving about ``n_sigma`` shared lattice points over the range of all
+        selected pairs (reported).
     mode : {"contracting", "expanding"}
     jaw_width : float
         Jaw contact width (m).
@@ -303,16 +768,22 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         Keep pairs whose both jaw nodes lie in the union of these regions: boxes
         ``(xmin, ymin, xmax, ymax)`` in m or shapely geometries.
     top : int
-        Number of best pairs refined with the exact method.
+        Number of best pairs refined with the exact method (``refined``).
     n_sigma : int
-        Lattice size used to choose the default ε.
+        Size of the coarse shared lattice, and the default ε.
     max_sigma : int
-        Largest lattice accepted (a tiny ``eps`` raises ``GraspError`` instead of
-        running for hours).
+        Largest shared lattice accepted (only reached with a huge ``n_sigma``).
     progress : callable, optional
-        Called as ``progress(done, total)`` after each lattice value.
+        Called as ``progress(done, total)`` after each lattice value and each pair
+        refined by bounds.
     model : GraspModel, optional
         Reuse a model from :func:`grasp_model`.
+    allow_pulling : bool
+        Let pairs flagged ``pulls`` (the jaw line leaves the part at a jaw, so a jaw
+        would have to pull) into ``refined``; by default they are ranked and flagged
+        but not proposed.
+    max_evaluations : int
+        Escape-level evaluations one pair may use before it is solved exactly instead.
 
     Returns
     -------
@@ -322,12 +793,19 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     ------
     GraspError
         Bad ε, range, regions, or no pair left after filtering.
+
+    Notes
+    -----
+    See the module docstring for the scheme and its guarantee
+    ``quality ≤ Q* ≤ quality_upper ≤ quality + ε`` on every row.
     """
     t = {}
     if eps is not None and not (math.isfinite(eps) and eps > 0):
         raise GraspError(f"eps = {eps!r}: must be a finite energy > 0 in joules")
     if not (isinstance(top, (int, np.integer)) and top >= 0):
         raise GraspError(f"top = {top!r}: must be a whole number >= 0")
+    if not (isinstance(max_evaluations, (int, np.integer)) and max_evaluations >= 1):
+        raise GraspError(f"max_evaluations = {max_evaluations!r}: must be a whole number >= 1")
     if model is None:
         model = grasp_model(mesh, K, mode=mode, jaw_width=jaw_width)
     t.update(model.timings)
@@ -338,7 +816,7 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     sel = np.ones(V, bool)
     if separation_range is not None:
         lo_r, hi_r = map(float, separation_range)
-        if not (math.isfinite(lo_r) and math.isfinite(hi_r) and 0 <= lo_r <= hi_r):
+        if not (math.isfinite(lo_r) and not math.isnan(hi_r) and 0 <= lo_r <= hi_r):
             raise GraspError(f"separation range {separation_range!r}: need 0 <= min <= max (m)")
         sel &= (sigma0 >= lo_r) & (sigma0 <= hi_r)
     rm = _region_mask(mesh.nodes, regions)
@@ -360,20 +838,47 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     else:
         lo, hi = float(sigma0[idx].min()), float(sigma_L.max())
     lam = lipschitz_constant(sigma0, k, hi, mode)
+    span = max(hi - lo, 1e-300)
     if eps is None:
-        eps = lam * max(hi - lo, 1e-300) / max(int(n_sigma), 1)
-    step = eps / lam
+        eps = lam * span / max(int(n_sigma), 1)
+    step = max(eps / lam, span / max(int(n_sigma), 1))     # coarse: ≤ n_sigma + 1 values
     grid = lattice(lo, hi, step, max_size=max_sigma)
+
+    # Step 1: strict spans of every pair, in the contracting frame x = sign·σ.
+    t0 = time.perf_counter()
+    sign = 1.0 if mode == "contracting" else -1.0
+    x0 = sign * sigma0
+    x_lo, x_hi = sign * sigma_L, x0[idx]                 # each pair's range [x_lo, x_hi]
+    C = 0.5 * k[idx] * (x_hi - x_lo) ** 2                # U_s(σ_L) per pair (J)
+    g_lo, g_hi = float(x_lo.min()), float(x_hi.max())
+    tol = pc.RTOL * max(abs(g_lo), abs(g_hi), g_hi - g_lo, 1e-300)
+    # Per pair, the exact method's tolerance: breakpoints closer than it are one.
+    tols = pc.RTOL * np.maximum.reduce([np.abs(x_lo), np.abs(x_hi), x_hi - x_lo,
+                                        np.full(len(idx), 1e-300)])
+    cr_ptr, cr_x, _n = _crossing_lists(x0, k, graph.edges, g_lo - tol, g_hi + tol, V)
+    ws = _Workspace(graph, x0, k, cr_ptr, cr_x, tol)
+    cap = int(np.sum(cr_ptr[idx + 1] - cr_ptr[idx])) + len(idx)
+    out_i = np.empty(cap, np.int64)
+    out_a, out_b = np.empty(cap), np.empty(cap)
+    out_ao, out_bo = np.empty(cap, np.bool_), np.empty(cap, np.bool_)
+    n_spans = _k_strict_spans(ws.indptr, ws.indices, ws.x0, ws.k, idx.astype(np.int64),
+                              np.ascontiguousarray(x_lo), np.ascontiguousarray(x_hi),
+                              cr_ptr, cr_x, tols, out_i, out_a, out_b, out_ao, out_bo)
+    span_i = out_i[:n_spans]
+    strict_local = np.unique(span_i)                     # positions in idx
+    t["strict_spans"] = time.perf_counter() - t0
+
+    # Step 2: the coarse shared lattice, every pair at once.
+    n_strict = len(strict_local)
+    total_steps = len(grid) + n_strict
     best_Q = np.zeros(len(idx))
     best_s = np.full(len(idx), np.nan)
     best_UA = np.zeros(len(idx))
     best_UL = np.zeros(len(idx))
-    s0 = sigma0[idx]
     kk = k[idx]
-    UsL = 0.5 * kk * (s0 - sigma_L) ** 2                # U_s(σ_L) per pair (J)
+    UsL = 0.5 * kk * (sigma0[idx] - sigma_L) ** 2
     t0 = time.perf_counter()
-
-    range_lo, range_hi = (sigma_L, s0) if mode == "contracting" else (s0, sigma_L)
+    range_lo, range_hi = (sigma_L, sigma0[idx]) if mode == "contracting" else (sigma0[idx], sigma_L)
 
     def sweep(sig: float) -> tuple[np.ndarray, np.ndarray]:
         U = vertex_energies(sig, sigma0, k, mode)
@@ -386,46 +891,99 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
         for lo_j in range(0, len(grid), 4 * workers):
             block = grid[lo_j: lo_j + 4 * workers]
             for j, (sig, (R, UL)) in enumerate(zip(block, pool.map(sweep, block)), start=lo_j):
-                Q = np.where((sig >= range_lo) & (sig <= range_hi), np.minimum(R, UL), -np.inf)
+                inside = (sig >= range_lo) & (sig <= range_hi)
+                Q = np.where(inside, np.minimum(R, UL), -np.inf)
                 better = Q > best_Q
                 best_Q = np.where(better, Q, best_Q)
                 best_s = np.where(better, sig, best_s)
                 best_UA = np.where(better, R, best_UA)
                 best_UL = np.where(better, UL, best_UL)
                 if progress is not None:
-                    progress(j + 1, len(grid))
+                    progress(j + 1, total_steps)
     t["lattice_sweeps"] = time.perf_counter() - t0
-    # Rank: quality descending, ties by pair order (stable).
-    order = np.argsort(-best_Q, kind="stable")
-    gi = idx[order]
+    lattice_Q = best_Q.copy()
+
+    # Step 3: per-pair bounds on the strict spans, refined where they can still change
+    # the answer; exact method where the budget runs out.
+    t0 = time.perf_counter()
+    Q = np.zeros(len(idx))
+    s_star = np.full(len(idx), np.nan)
+    UA = np.zeros(len(idx))
+    UL = np.zeros(len(idx))
+    upper = np.zeros(len(idx))
+    settled = np.full(len(idx), "zero", dtype=object)
+    exact = np.zeros(len(idx), bool)
+    xg = sign * grid
+    g_order = np.argsort(xg, kind="stable")
+    xg = xg[g_order]
+    starts = np.searchsorted(span_i, strict_local)
+    ends = np.searchsorted(span_i, strict_local, side="right")
+    fallback = []
+    for n, (i, a0, a1) in enumerate(zip(strict_local, starts, ends)):
+        spans = [(float(out_a[j]), float(out_b[j]), bool(out_ao[j]), bool(out_bo[j]))
+                 for j in range(a0, a1)]
+        j0, j1 = np.searchsorted(xg, [x_lo[i] - tol, x_hi[i] + tol])
+        res = _settle_pair(ws, int(idx[i]), float(C[i]), float(eps), lam, float(tols[i]),
+                           spans, xg[j0:j1], int(max_evaluations))
+        if res.ok:
+            settled[i] = "bounds"
+            upper[i] = max(res.upper, lattice_Q[i])
+            if res.Q > lattice_Q[i] * (1.0 + 1e-12):
+                Q[i] = res.Q
+                s_star[i] = sign * res.x
+                Es = 0.5 * kk[i] * max(x_hi[i] - res.x, 0.0) ** 2
+                UA[i] = res.B - Es if math.isfinite(res.B) else math.inf
+                UL[i] = C[i] - Es
+            else:              # nothing better than the lattice: keep its row as it was
+                Q[i], s_star[i], UA[i], UL[i] = lattice_Q[i], best_s[i], best_UA[i], best_UL[i]
+        else:
+            fallback.append(i)
+        if progress is not None:
+            progress(len(grid) + n + 1, total_steps)
+    t["settle_bounds"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for i in fallback:
+        r = optimize_separation_arrays(sigma0, k, graph, int(idx[i]), float(sigma_L[i]), mode=mode,
+                                       method="exact", n_curve=2)
+        _set_exact(i, r, Q, s_star, UA, UL, upper, settled, exact)
+    t["settle_exact"] = time.perf_counter() - t0
+
+    # The `top` pairs (not pulling, unless allowed) with the exact method, full reports.
+    pulls = model.pulls[idx]
+    order = np.argsort(-Q, kind="stable")
     refined: list[GraspAnalysis] = []
     t0 = time.perf_counter()
-    for v in gi[: int(top)]:
-        if best_Q[np.searchsorted(idx, v)] <= 0:
+    for i in order:
+        if len(refined) >= int(top) or Q[i] <= 0:
             break
-        a, b = graph.pairs[v]
-        refined.append(optimize_separation(mesh, (int(a), int(b)), method="exact", mode=mode,
-                                           jaw_width=jaw_width, model=model))
+        if pulls[i] and not allow_pulling:
+            continue
+        a, b = graph.pairs[idx[i]]
+        r = optimize_separation(mesh, (int(a), int(b)), method="exact", mode=mode,
+                                jaw_width=jaw_width, model=model)
+        refined.append(r)
+        _set_exact(i, r.separation, Q, s_star, UA, UL, upper, settled, exact)
     t["refine_exact"] = time.perf_counter() - t0
-    # Report the refined pairs' exact values (never below their lattice values), then
-    # re-rank: the refined pairs stay ahead of every unrefined one.
-    lattice_Q = best_Q[order]
-    Q, s_star = lattice_Q.copy(), best_s[order].copy()
-    UA, UL = best_UA[order].copy(), best_UL[order].copy()
-    exact = np.zeros(len(order), bool)
-    for i, r in enumerate(refined):
-        exact[i] = True
-        Q[i] = r.quality
-        s_star[i] = np.nan if r.sigma_star is None else r.sigma_star
-        sep = r.separation
-        UA[i] = math.inf if sep.U_A_infinite else (0.0 if sep.U_A is None else sep.U_A)
-        UL[i] = sep.U_L
+    refined.sort(key=lambda r: -r.quality)               # stable: ties keep their order
     rank = np.argsort(-Q, kind="stable")
-    sel = order[rank]
+    pairs = graph.pairs[idx[rank]]
     return PlanResult(
-        pairs=graph.pairs[idx[sel]], sigma0=sigma0[idx[sel]], k=k[idx[sel]], e_max=e_max[sel],
-        sigma_L=sigma_L[sel], sigma_star=s_star[rank], quality=Q[rank],
-        U_A=UA[rank], U_L=UL[rank], pulls=model.pulls[idx[sel]],
+        pairs=pairs, sigma0=sigma0[idx[rank]], k=k[idx[rank]], e_max=e_max[rank],
+        sigma_L=sigma_L[rank], sigma_star=s_star[rank], quality=Q[rank],
+        U_A=UA[rank], U_L=UL[rank], pulls=pulls[rank],
         lattice_quality=lattice_Q[rank], exact=exact[rank], epsilon=float(eps),
         lipschitz=lam, step=step, n_sigma=len(grid), refined=refined, mode=mode,
-        jaw_width=float(jaw_width), timings=t, model=model)
+        jaw_width=float(jaw_width), timings=t, model=model, quality_upper=upper[rank],
+        settled=np.asarray(settled[rank], dtype=str), jaw_xy=mesh.nodes[pairs],
+        allow_pulling=bool(allow_pulling), n_evaluations=int(ws.n_eval))
+
+
+def _set_exact(i: int, r, Q, s_star, UA, UL, upper, settled, exact) -> None:
+    """Row ``i`` takes the exact method's values (``r`` a SeparationResult)."""
+    Q[i] = r.quality
+    upper[i] = r.quality
+    s_star[i] = np.nan if r.sigma_star is None else r.sigma_star
+    UA[i] = math.inf if r.U_A_infinite else (0.0 if r.U_A is None else r.U_A)
+    UL[i] = r.U_L
+    settled[i] = "exact"
+    exact[i] = True

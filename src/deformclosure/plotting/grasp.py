@@ -10,7 +10,8 @@ from ..units import length_scale
 from .mesh import new_figure, plot_mesh, save_figure
 
 __all__ = ["plot_quality_curve", "plot_deformed_grasp", "plot_energy_landscape",
-           "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots"]
+           "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots",
+           "quality_color_range"]
 
 
 def plot_quality_curve(analysis, ax=None, units: str = "mm"):
@@ -167,10 +168,60 @@ def _arclength(mesh, loop_ids) -> tuple[np.ndarray, float]:
     return arc, off
 
 
+def _shown_pairs(plan, n: int) -> list[tuple[int, int, float, bool]]:
+    """The pairs a plan proposes, best first: its exact ``top`` list (``refined``), or
+    without one the best rows, pulling pairs left out unless the plan allows them.
+    ``(a, b, quality (J), pulls)`` each."""
+    pulls = getattr(plan, "pulls", np.zeros(len(plan.pairs), bool))
+    if plan.refined:
+        g = plan.model.graph
+        return [(int(r.jaws[0]), int(r.jaws[1]), float(r.quality),
+                 bool(plan.model.pulls[g.vertex_index(int(r.jaws[0]), int(r.jaws[1]))]))
+                for r in plan.refined[:n]]
+    allow = getattr(plan, "allow_pulling", False)
+    out = []
+    for i in range(len(plan.pairs)):
+        if len(out) >= n or plan.quality[i] <= 0:
+            break
+        if pulls[i] and not allow:
+            continue
+        out.append((int(plan.pairs[i, 0]), int(plan.pairs[i, 1]), float(plan.quality[i]),
+                    bool(pulls[i])))
+    return out
+
+
+def quality_color_range(quality: np.ndarray, percentile: float = 5.0,
+                        decades: float = 4.0) -> tuple[float, float] | None:
+    """Colour range (J) of a plan's quality map: from the ``percentile``-th percentile of
+    the positive qualities, but at most ``decades`` below the best, to the best.
+
+    Most pairs of a part cannot hold it (``Q = 0``) and the positive qualities span many
+    decades, so a linear scale from 0 shows one bright cell; this range, on a log scale,
+    shows the pairs that can hold. ``None`` when no quality is positive.
+    """
+    q = np.asarray(quality, float)
+    q = q[np.isfinite(q) & (q > 0)]
+    if not q.size:
+        return None
+    hi = float(q.max())
+    lo = max(float(np.percentile(q, percentile)), hi * 10.0 ** -decades)
+    return (min(lo, hi / 10.0) if lo >= hi else lo), hi
+
+
 def plot_quality_map(plan, ax=None, units: str = "mm"):
-    """Quality of every jaw pair over (arclength of jaw 1) × (arclength of jaw 2)."""
+    """Quality of every jaw pair over (arclength of jaw 1) × (arclength of jaw 2).
+
+    Colour: ``Q`` in mJ on a log scale over :func:`quality_color_range` (the 5th
+    percentile of the positive qualities, at most four decades below the best, to the
+    best); pairs that cannot hold (``Q = 0``) light grey, pairs flagged ``pulls`` (a jaw
+    would have to pull) hatched, the proposed (``top``) pairs numbered in cyan circles.
+    The legend sits below the axes, off the map.
+    """
+    from matplotlib.colors import LogNorm
+    from matplotlib.patches import Patch
+
     if ax is None:
-        _, ax = new_figure((6.5, 5.5))
+        _, ax = new_figure((6.5, 6.5))
     mesh = plan.model.mesh
     loops = (0,) if plan.mode == "contracting" else range(len(mesh.loops))
     arc, total = _arclength(mesh, loops)
@@ -178,38 +229,76 @@ def plot_quality_map(plan, ax=None, units: str = "mm"):
     ids = ids[np.argsort(arc[ids])]
     pos = np.full(mesh.n_nodes, -1)
     pos[ids] = np.arange(len(ids))
+    ia, ib = pos[plan.pairs[:, 0]], pos[plan.pairs[:, 1]]
     M = np.full((len(ids), len(ids)), np.nan)
-    M[pos[plan.pairs[:, 0]], pos[plan.pairs[:, 1]]] = plan.quality
-    M[pos[plan.pairs[:, 1]], pos[plan.pairs[:, 0]]] = plan.quality
+    M[ia, ib] = M[ib, ia] = plan.quality * 1e3
     s = 1.0 / length_scale(units)
     edges = np.append(arc[ids], total) * s
-    pc = ax.pcolormesh(edges, edges, M * 1e3, cmap="magma", shading="flat")
-    ax.figure.colorbar(pc, ax=ax, label="quality Q (mJ)")
-    top = plan.pairs[: min(5, len(plan.pairs))]
-    if len(top):
-        ar = arc[top]
-        ax.plot(ar.min(1) * s, ar.max(1) * s, "o", mfc="none", mec="c", ms=9, label="top pairs")
-        ax.legend(fontsize=8, loc="upper left")
+    rng = quality_color_range(plan.quality)
+    import matplotlib
+
+    cmap = matplotlib.colormaps["magma"].with_extremes(under="0.85", bad="white")
+    if rng is None:
+        pc = ax.pcolormesh(edges, edges, M, cmap=cmap, shading="flat", vmin=0.0, vmax=1.0)
+    else:
+        lo, hi = rng[0] * 1e3, rng[1] * 1e3
+        Mc = np.where(M > 0, M, np.where(np.isnan(M), np.nan, lo * 1e-3))   # zeros: "under"
+        pc = ax.pcolormesh(edges, edges, Mc, cmap=cmap, shading="flat",
+                           norm=LogNorm(vmin=lo, vmax=hi))
+    ax.figure.colorbar(pc, ax=ax, label="quality Q (mJ, log scale)", extend="min",
+                       shrink=0.85)
+    handles = [Patch(facecolor="0.85", edgecolor="0.5", label="Q = 0 (cannot hold)")]
+    pulls = getattr(plan, "pulls", None)
+    if pulls is not None and np.any(pulls):
+        P = np.zeros_like(M)
+        P[ia[pulls], ib[pulls]] = P[ib[pulls], ia[pulls]] = 1.0
+        centres = 0.5 * (edges[:-1] + edges[1:])
+        ax.contourf(centres, centres, P, levels=[0.5, 1.5], colors="none", hatches=["////"])
+        handles.append(Patch(facecolor="none", edgecolor="0.3", hatch="////",
+                             label="pulls: a jaw would have to pull"))
+    shown = _shown_pairs(plan, 5)
+    if shown:
+        for r, (a, b, _q, _p) in enumerate(shown):
+            u, v = sorted((arc[a] * s, arc[b] * s))
+            ax.plot([u], [v], "o", mfc="none", mec="c", ms=11, mew=1.5)
+            ax.annotate(str(r + 1), (u, v), color="c", fontsize=8, ha="center", va="center")
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], marker="o", ls="none", mfc="none", mec="c", ms=9,
+                              label="top pairs (rank)"))
+    ax.legend(handles=handles, fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+              ncol=min(3, len(handles)), frameon=False)
     ax.set_xlabel(f"jaw 1 arclength ({units})")
     ax.set_ylabel(f"jaw 2 arclength ({units})")
     ax.set_aspect("equal")
-    ax.set_title(f"grasp quality over jaw pairs (ε = {plan.epsilon:.3g} J)")
+    ax.set_title(f"quality of every jaw pair (each within ε = {plan.epsilon:.2g} J)")
     return ax
 
 
 def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
-    """The best ``n`` jaw pairs drawn on the part, numbered by rank."""
+    """The proposed jaw pairs (the plan's ``top`` list) drawn on the part, by rank.
+
+    Pairs flagged ``pulls`` are drawn dashed and labelled (they are proposed only when
+    the plan allows pulling). The legend sits to the right of the axes, off the part.
+    """
     if ax is None:
-        _, ax = new_figure((6, 6))
+        _, ax = new_figure((8, 6))
     mesh = plan.model.mesh
     plot_mesh(mesh, ax=ax, units=units)
     s = 1.0 / length_scale(units)
-    for r, (a, b) in enumerate(plan.pairs[:n]):
+    shown = _shown_pairs(plan, n)
+    for r, (a, b, q, pulls) in enumerate(shown):
         xy = mesh.nodes[[a, b]] * s
-        ax.plot(xy[:, 0], xy[:, 1], "-o", color=f"C{r % 10}", lw=2, ms=6,
-                label=f"#{r + 1}: Q = {plan.quality[r] * 1e3:.3g} mJ")
-    ax.legend(fontsize=8, loc="upper right")
-    ax.set_title(f"top {min(n, len(plan.pairs))} jaw pairs")
+        ax.plot(xy[:, 0], xy[:, 1], "--o" if pulls else "-o", color=f"C{r % 10}", lw=2, ms=6,
+                label=f"#{r + 1}: nodes {a}–{b}, Q = {q * 1e3:.3g} mJ"
+                      + (" (pulls)" if pulls else ""))
+        mid = xy.mean(axis=0)
+        ax.annotate(f"#{r + 1}", mid, color=f"C{r % 10}", fontsize=8, fontweight="bold",
+                    xytext=(3, 3), textcoords="offset points")
+    if shown:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    ax.set_title(f"top {len(shown)} jaw pairs" + ("" if getattr(plan, "allow_pulling", False)
+                                                  else " (pulling pairs left out)"))
     return ax
 
 
@@ -218,8 +307,8 @@ def save_plan_plots(plan, out_dir: str | Path, units: str = "mm") -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for name, fn, size in (("quality_map.png", plot_quality_map, (6.5, 5.5)),
-                           ("top_grasps.png", plot_top_grasps, (6, 6))):
+    for name, fn, size in (("quality_map.png", plot_quality_map, (6.5, 6.5)),
+                           ("top_grasps.png", plot_top_grasps, (8, 6))):
         fig, ax = new_figure(size)
         fn(plan, ax=ax, units=units)
         save_figure(fig, out / name)
