@@ -15,6 +15,7 @@ from .errors import (BatchError, DeformClosureError, FingerError, GraspError, Me
                      PartError, StiffnessError)
 from .grasp import (ContactGraph, GraspAnalysis, contact_graph, grasp_model, optimize_separation,
                     pair_stiffness, release_energies, release_energy)
+from .dspace.escape import FingerRelease, release_energy_fingers
 from .mesh import Mesh, mesh_part, read_mesh, write_mesh
 from .part import Material, MeshOptions, Part, demo_part, notched_part
 
@@ -33,6 +34,7 @@ __all__ = [
     "FreeBodySolver", "rigid_modes", "read_stiffness",
     "pair_stiffness", "contact_graph", "ContactGraph", "release_energy", "release_energies",
     "grasp_model", "optimize_separation", "GraspAnalysis", "plan_grasps", "PlanResult",
+    "release_energy_fingers", "FingerRelease",
     "DeformClosureError", "PartError", "MeshError", "StiffnessError", "GraspError",
     "FingerError", "BatchError",
 ]

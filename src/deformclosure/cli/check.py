@@ -8,9 +8,10 @@ import click
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..limits import check_model_size, limits_help
 from .common import load_part_or_mesh, mesh_input_options, write_json
 
-__all__ = ["command", "contact_points"]
+__all__ = ["command", "contact_points", "merge_release"]
 
 EPILOG = """\b
 Examples:
@@ -28,6 +29,14 @@ part at rest: touching, or overlapping it to pre-squeeze it. Point fingers on th
 boundary of a part file are inserted as mesh nodes. The report is SI (m, N, J); the
 certificate twist [vx, vy, omega] is the velocity of the part's area centroid (m/s) and
 its angular velocity (rad/s).
+
+\b
+The verdict is the paper's definition: U_A, the least work that releases the part,
+from the energy landscape over the part's placement (x, y, phi) among the fixed
+fingers; deform_closure = U_A > its error at a strict minimum. The rigid-motion test at
+rest (Thm 1) is reported as rigid_closure with its order and certificate. The escape
+path (placements in m and rad, energies in J) is in the report and, with --plot, drawn
+beside the check picture with its energy profile.
 """
 
 
@@ -49,7 +58,7 @@ def contact_points(part, fingers) -> np.ndarray:
     return pts[d <= tol]
 
 
-@click.command(epilog=EPILOG)
+@click.command(epilog=EPILOG + limits_help("check"))
 @click.argument("part", type=click.Path(dir_okay=False))
 @click.option("--fingers", "finger_file", required=True, type=click.Path(dir_okay=False),
               help="Finger file (JSON, see below).")
@@ -57,16 +66,26 @@ def contact_points(part, fingers) -> np.ndarray:
               help="Write the JSON report here ('-' for stdout).")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None,
               help="Draw the part, fingers, contact forces and escaping motion (PNG/SVG).")
+@click.option("--grid-steps", type=int, default=48, show_default=True,
+              help="Release landscape: translation steps per part diameter (at most half "
+                   "the smallest disc radius per step).")
+@click.option("--saddle-levels", type=int, default=2, show_default=True,
+              help="Release landscape: halvings of the lattice near the saddle (error estimate).")
 @mesh_input_options()
 def command(part: str, finger_file: str, output: str | None, plot: str | None,
-            material: str | None, units: str | None) -> int:
-    """Deform closure of a contact set: equilibrium, contact forces, verdict, certificate.
+            grid_steps: int, saddle_levels: int, material: str | None, units: str | None) -> int:
+    """Deform closure of a contact set: release energy U_A and escape path, equilibrium,
+    contact forces, rigid-closure order and certificate.
 
     PART is a part file (JSON) or a mesh file.
     """
     from ..outputs import check_outputs
 
     check_outputs([output, plot], [], [part, finger_file])
+    if not (8 <= grid_steps <= 1000):
+        raise DeformClosureError(f"--grid-steps = {grid_steps}: give a whole number from 8 to 1000")
+    if not (0 <= saddle_levels <= 4):
+        raise DeformClosureError(f"--saddle-levels = {saddle_levels}: give a whole number from 0 to 4")
     from ..dspace.closure import deform_closure
     from ..dspace.fingers import load_fingers
     from ..mesh.io import is_mesh_file
@@ -80,12 +99,31 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None,
     if not is_mesh_file(p):
         pts = contact_points(Part.from_file(p), fingers)
     part_obj, mesh = load_part_or_mesh(p, points=pts, units=units, material=material)
+    check_model_size(mesh, "pads", solvers=2 if part_obj is None else 3, what="check")
     res = deform_closure(mesh, fingers)
-    report = res.to_dict()
+    from ..dspace.escape import release_energy_fingers
+    from .common import lazy_progress
+
+    tick, close = lazy_progress(False, "release landscape", "placements")
+    try:
+        rel = release_energy_fingers(mesh, fingers, part=part_obj, start=res.equilibrium,
+                                     rigid_closed=res.deform_closure, n_translation=grid_steps,
+                                     levels=saddle_levels, count=lambda n: tick(n, None))
+    finally:
+        close()
+    report = merge_release(res.to_dict(), res, rel)
     eq = res.equilibrium
-    verdict = "HELD (deform closure)" if res.deform_closure else "NOT HELD (the part escapes)"
     click.echo(f"{mesh.name}: {mesh.n_nodes} nodes, {len(fingers)} fingers")
-    click.echo(f"verdict: {verdict}, decided at order {res.order}")
+    click.echo(f"verdict: {_verdict(rel)}")
+    click.echo(f"release energy U_A = {_joules(rel.U_A)} ± {rel.U_A_error:.3g} J (noise floor "
+               f"{rel.noise_relative:.1%}), escape {_target(rel)}; "
+               f"{rel.n_evaluations} placements solved in {rel.seconds:.1f} s")
+    click.echo(f"quality min(U_A, U_L) = {_joules(rel.quality)}, U_L = {_joules(rel.U_L)} "
+               f"(elastic limit over the critical distance {rel.critical_distance:.3g} m)")
+    for w in rel.warnings:
+        click.echo(f"warning: {w}", err=True)
+    rigid = "closed" if res.deform_closure else "not closed (escaping twist below)"
+    click.echo(f"rigid test at rest (Thm 1): {rigid}, decided at order {res.order}")
     click.echo(f"energy at equilibrium: {res.energy:.6g} J (linear), {eq.iterations} linearisations"
                + ("" if eq.converged else " (NOT converged)"))
     for c in res.contacts:
@@ -102,11 +140,42 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None,
                    "(about the area centroid)")
     write_json(report, output)
     if plot:
-        from ..plotting.dspace import plot_check
-        from ..plotting.mesh import new_figure, save_figure
+        from ..plotting.escape import plot_check_and_escape
+        from ..plotting.mesh import save_figure
 
         units = part_obj.units if part_obj is not None else "m"
-        fig, ax = new_figure()
-        plot_check(mesh, res, fingers, ax=ax, units=units)
+        fig = plot_check_and_escape(mesh, res, rel, fingers, units=units)
         save_figure(fig, plot)
     return 0
+
+
+def merge_release(report: dict, closure, release) -> dict:
+    """The check report (SPEC §5, §7): the rigid test's keys as before, ``deform_closure``
+    from the release energy, the rigid verdict as ``rigid_closure``, and the release keys."""
+    out = dict(report)
+    out["rigid_closure"] = bool(closure.deform_closure)
+    rel = release.to_dict()
+    out.update(rel)
+    out["units"] = {**report.get("units", {}), "angle": "rad"}
+    return out
+
+
+def _joules(v: float) -> str:
+    return "infinite" if not np.isfinite(v) else f"{v:.6g} J"
+
+
+def _target(rel) -> str:
+    if rel.U_A_infinite:
+        return "impossible within the fingers' reach (a cage)"
+    if not rel.complete:
+        return "search stopped (U_A is a lower bound)"
+    return {"released": "to a released placement", "equilibrium": "to another equilibrium"}.get(
+        rel.target, "none")
+
+
+def _verdict(rel) -> str:
+    if rel.deform_closure:
+        return "HELD (deform closure: U_A exceeds its error)"
+    if rel.caged:
+        return "CAGED (not held in place, but leaving takes U_A)"
+    return "NOT HELD (the part escapes without work)" 

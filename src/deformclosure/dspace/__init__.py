@@ -4,7 +4,9 @@ Pipeline: configurations ``q`` of a meshed part → energies (:mod:`.energy`, li
 corotational) → topology-preserving set ``D_T`` (:mod:`.topology`) → fingers and
 D-obstacles, ``D_free`` (:mod:`.fingers`, :mod:`.obstacles`) → slices with one node
 moving (:mod:`.slices`) → frictionless contact equilibrium (:mod:`.equilibrium`) →
-deform closure with a certificate (:mod:`.closure`).
+deform closure with a certificate (:mod:`.closure`); the release energy ``U_A`` of any
+finger set from the contact energy over the part's placements (:mod:`.placement_energy`,
+:mod:`.escape`).
 
 Conventions: node arrays ``(n, 2)`` in metres, triangles ``(m, 3)`` counter-clockwise,
 configurations ``(n, 2)``/``(2n,)`` or batches ``(b, n, 2)``/``(b, 2n)``; SI throughout.
@@ -18,11 +20,13 @@ Parts", IJRR 24(11), 2005, §3.
 
 from .closure import (ClosureResult, ContactGroup, ContactPrimitive, ContactReport, RigidClosure,
                       contact_groups, deform_closure, relative_curvature, rigid_closure)
+from .escape import FingerRelease, PlacementGrid, PlacementLandscape, release_energy_fingers
 from .energy import (as_configurations, configuration_strains, corotational_energy, deformation_gradients,
                      element_energies, linear_energy, polar_rotation, strain_energy)
 from .equilibrium import EquilibriumResult, area_centroid, equilibrium
 from .fingers import (FINGER_TYPES, DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger,
                       fingers_from_dict, fingers_to_dict, load_fingers, write_fingers)
+from .placement_energy import PlacementEnergy, PlacementState
 from .obstacles import TOUCH_TOLERANCE, boundary_gaps, dobstacle_mask, in_dfree, in_dobstacle, touch_tolerance
 from .slices import SliceResult, dfree_slice
 from .topology import (DEFAULT_MIN_AREA_RATIO, boundary_crossings, in_dt, inverted_triangles, loop_edges,
@@ -47,4 +51,7 @@ __all__ = [
     # closure
     "ContactPrimitive", "ContactGroup", "RigidClosure", "ContactReport", "ClosureResult",
     "contact_groups", "relative_curvature", "rigid_closure", "deform_closure",
+    # release energy over placements (SPEC §7)
+    "PlacementEnergy", "PlacementState", "PlacementGrid", "PlacementLandscape", "FingerRelease",
+    "release_energy_fingers",
 ]

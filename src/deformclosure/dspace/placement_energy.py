@@ -1,0 +1,936 @@
+"""Contact energy of a part placed rigidly among fixed fingers (SPEC §7, kernel).
+
+For fixed fingers the state of a frictionless part is its *placement* ``g = (x, y, φ)``:
+the part at rest, turned by ``φ`` (rad) about its area centroid ``c`` and then moved by
+``(x, y)`` (m), so a material point ``p`` goes to ``R(φ)(p − c) + c + (x, y)``. Every
+placement has the contact energy of §6 with the fingers as rigid bodies::
+
+    E(g) = min ½ uᵀ K u   subject to  g_r(g) + C_r u ≥ 0  for every contact row r,
+
+where the deformation ``u`` has no rigid part (area-weighted, the placement *is* the rigid
+motion) — the constraint of :class:`deformclosure.pads.contact.PadContact`, whose boundary
+compliance ``Y = Pᵀ Z P`` (one factorisation) is reused. In the dual, with the Delassus
+matrix ``W = C Y Cᵀ``::
+
+    E(g) = max_{λ ≥ 0} −(g₀ᵀ λ + ½ λᵀ W λ) = ½ λᵀ W λ    at the solution,
+
+a small linear complementarity problem solved per placement by block principal pivoting
+(Júdice & Pires), compiled with numba and warm-started from a neighbour's active set.
+
+Contact rows are built in the part frame, at rest (small-displacement theory), from the
+fingers moved by ``g⁻¹``:
+
+* boundary node against a finger body (convex polygon, half-plane): the node's signed
+  distance to the body, force along the body's outward normal there;
+* boundary node against a disc: a disc presses like a round pad of SPEC §6 along its
+  *axis* (:func:`disc_axes`, fixed to the finger). For a node not behind the disc (axial
+  coordinate from the centre ``s ≥ −ρ``) within the pad's contact reach (75° from the
+  axis, ``|x| < ρ sin 75°``) the gap is its distance *along the axis* to the disc's
+  surface at its own cross coordinate ``x``, the force along the disc's normal there —
+  so discs at the pads' places give the pads' energies, also when pressed past their
+  centre; beyond the reach (the steep flanks and the sides, ``|x| ≥ ρ sin 75°``) contact
+  is not enforced, exactly as for pads (a node can slip past a disc's side only through a
+  sliver 3.4 % of ρ wide); behind the disc (``s < −ρ``) the radial distance;
+* finger corner (point finger, polygon corner) against a boundary edge whose foot point
+  lies on the edge: the corner's distance to the edge line, force along the edge's inward
+  normal, shared by the edge's end nodes (``1 − s``, ``s``); a corner outside the part in
+  the normal cone of a convex vertex gives a row to that vertex; a corner inside the part
+  presses only on its nearest edge (or vertex), so thin walls are safe;
+* a disc with no boundary node inside it, against a boundary edge whose foot point it
+  faces and whose end nodes are outside it: its centre's distance to the edge line minus
+  ``r`` (between two nodes a straight edge may cut the disc while both stay outside it,
+  on a mesh coarse for the disc; once a node is inside, the node rows of SPEC §6 alone
+  see the disc);
+* a disc whose centre lies inside the part presses on one edge like a corner with an
+  offset ``r`` (otherwise a small disc could pass through the material with no node
+  inside it).
+
+Gaps within the touching tolerance (``1e-9`` × the diameter, SPEC §3) count as free.
+Candidate rows are those with a rest gap below twice the deepest penetration; every row
+with a gap up to four times it is checked against the solution's displacement and added
+if the solution makes it penetrate (then solved again).
+
+Placements where a finger reaches deeper into the part than ``max_depth_ratio`` (50 %)
+of the part's largest inscribed radius are *inadmissible* (energy ``inf``): the rule
+:func:`deformclosure.dspace.placement.check_finger_placement` applies at rest, outside the
+small-displacement model. So are placements whose energy exceeds that of a unit strain
+throughout the part (``½ E t A``): contradictory contact rows (a finger cutting through
+a thin part) make the contact problem infeasible.
+
+The energy is exactly invariant under a rigid motion of part and fingers together
+(everything is computed in the part frame).
+
+References
+----------
+J. J. Júdice and F. M. Pires, "A block principal pivoting algorithm for large-scale
+strictly monotone linear complementarity problems", Computers & Operations Research
+21(5), 1994.
+P. Wriggers, *Computational Contact Mechanics*, 2nd ed., Springer 2006.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+from numba import njit
+
+from .fingers import DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger
+from .obstacles import BoundaryModel, touch_tolerance
+from .placement import MAX_DEPTH_RATIO
+from ..pads.geometry import FLANK_ANGLE
+
+__all__ = ["PlacementEnergy", "PlacementState", "inscribed_radius", "disc_axes"]
+
+# finger codes
+_POINT, _DISC, _POLYGON, _HALFPLANE = 0, 1, 2, 3
+# row kinds
+_NODE_BODY, _CORNER_EDGE, _CORNER_NODE, _CENTRE_EDGE, _DISC_EDGE = 0, 1, 2, 3, 4
+
+
+def inscribed_radius(mesh: Any) -> float:
+    """Radius (m) of the largest circle inscribed in the part at rest."""
+    import shapely
+
+    rings = [mesh.nodes[np.asarray(loop)] for loop in mesh.loops]
+    return float(shapely.maximum_inscribed_circle(shapely.Polygon(rings[0], rings[1:])).length)
+
+
+# ----------------------------------------------------------------------------- geometry
+
+
+@njit(cache=True, nogil=True)
+def _place_fingers(g, c, ftype, fpar, verts, vnorm):  # pragma: no cover - compiled
+    """Fingers in the part frame for placement ``g``: params, vertices, normals, offsets."""
+    cph, sph = np.cos(g[2]), np.sin(g[2])
+    F = ftype.shape[0]
+    par = fpar.copy()
+    V = verts.shape[0]
+    pv = np.empty((V, 2))
+    pn = np.empty((V, 2))
+    po = np.empty(V)
+    for f in range(F):
+        t = ftype[f]
+        # a point w of the world goes to Rᵀ (w − c − t) + c
+        x, y = fpar[f, 0] - c[0] - g[0], fpar[f, 1] - c[1] - g[1]
+        par[f, 0] = cph * x + sph * y + c[0]
+        par[f, 1] = -sph * x + cph * y + c[1]
+        if t == _HALFPLANE:
+            nx, ny = fpar[f, 2], fpar[f, 3]
+            par[f, 2] = cph * nx + sph * ny
+            par[f, 3] = -sph * nx + cph * ny
+        elif t == _DISC:
+            nx, ny = fpar[f, 3], fpar[f, 4]
+            par[f, 3] = cph * nx + sph * ny
+            par[f, 4] = -sph * nx + cph * ny
+    for k in range(V):
+        x, y = verts[k, 0] - c[0] - g[0], verts[k, 1] - c[1] - g[1]
+        pv[k, 0] = cph * x + sph * y + c[0]
+        pv[k, 1] = -sph * x + cph * y + c[1]
+        nx, ny = vnorm[k, 0], vnorm[k, 1]
+        pn[k, 0] = cph * nx + sph * ny
+        pn[k, 1] = -sph * nx + cph * ny
+        po[k] = pn[k, 0] * pv[k, 0] + pn[k, 1] * pv[k, 1]
+    return par, pv, pn, po
+
+
+@njit(cache=True, nogil=True)
+def _body_sd(t, par, vs, ve, pv, pn, po, px, py):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of a finger body at point (px, py)."""
+    if t == _DISC:
+        dx, dy = px - par[0], py - par[1]
+        r = par[2]
+        # not behind the disc and within the pad's contact reach: the gap along the disc's
+        # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
+        # gradient (the disc's normal at that surface point); behind it the radial distance
+        ax, ay = par[3], par[4]
+        s = dx * ax + dy * ay
+        x = -dx * ay + dy * ax
+        if s >= -r:
+            if abs(x) >= par[5]:
+                # the pad's steep flanks (beyond 75° from the axis) and its sides: not
+                # enforced, as for pads (SPEC §6)
+                return np.inf, ax, ay
+            root = np.sqrt(r * r - x * x)
+            return (s - root) * root / r, (ax * root - ay * x) / r, (ay * root + ax * x) / r
+        d = np.sqrt(dx * dx + dy * dy)
+        if d > 0:
+            return d - r, dx / d, dy / d
+        return -r, 1.0, 0.0
+    if t == _HALFPLANE:
+        return (px - par[0]) * par[2] + (py - par[1]) * par[3], par[2], par[3]
+    # convex polygon
+    depth = -np.inf
+    jd = vs
+    for j in range(vs, ve):
+        lev = pn[j, 0] * px + pn[j, 1] * py - po[j]
+        if lev > depth:
+            depth, jd = lev, j
+    if depth <= 0:
+        return depth, pn[jd, 0], pn[jd, 1]
+    best, bx, by = np.inf, 0.0, 0.0
+    for j in range(vs, ve):
+        k = j + 1 if j + 1 < ve else vs
+        ax, ay = pv[j, 0], pv[j, 1]
+        ex, ey = pv[k, 0] - ax, pv[k, 1] - ay
+        s = ((px - ax) * ex + (py - ay) * ey) / (ex * ex + ey * ey)
+        s = min(max(s, 0.0), 1.0)
+        fx, fy = ax + s * ex, ay + s * ey
+        d = np.hypot(px - fx, py - fy)
+        if d < best:
+            best, bx, by = d, fx, fy
+    if best > 0:
+        return best, (px - bx) / best, (py - by) / best
+    return 0.0, pn[jd, 0], pn[jd, 1]
+
+
+@njit(cache=True, nogil=True)
+def _inside_and_distance(px, py, xb, ea, eb):  # pragma: no cover - compiled
+    """Even-odd membership of (px, py) in the part, and its distance to the boundary."""
+    inside = False
+    dmin = np.inf
+    for e in range(ea.shape[0]):
+        ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+        bx, by = xb[eb[e], 0], xb[eb[e], 1]
+        if (ay > py) != (by > py):
+            xint = ax + (py - ay) * (bx - ax) / (by - ay)
+            if px < xint:
+                inside = not inside
+        ex, ey = bx - ax, by - ay
+        den = ex * ex + ey * ey
+        s = ((px - ax) * ex + (py - ay) * ey) / den if den > 0 else 0.0
+        s = min(max(s, 0.0), 1.0)
+        d = np.hypot(px - ax - s * ex, py - ay - s * ey)
+        if d < dmin:
+            dmin = d
+    return inside, dmin
+
+
+@njit(cache=True, nogil=True)
+def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar, vstart,
+          verts, vnorm, cap):  # pragma: no cover - compiled
+    """All contact rows with a gap below ``radius`` (when ``emit``) and, always, the
+    deepest penetration and the largest finger depth (for admissibility).
+
+    Returns ``(n, kind, finger, corner, element, na, nb, wa, wb, dx, dy, gap, px, py,
+    pmax, depth)``; arrays have capacity ``cap``.
+    """
+    par, pv, pn, po = _place_fingers(g, c, ftype, fpar, verts, vnorm)
+    nbn = xb.shape[0]
+    ne = ea.shape[0]
+    F = ftype.shape[0]
+    kind = np.empty(cap, np.int64)
+    finger = np.empty(cap, np.int64)
+    corner = np.empty(cap, np.int64)
+    element = np.empty(cap, np.int64)
+    na = np.empty(cap, np.int64)
+    nb = np.empty(cap, np.int64)
+    wa = np.empty(cap)
+    wb = np.empty(cap)
+    dx = np.empty(cap)
+    dy = np.empty(cap)
+    gap = np.empty(cap)
+    qx = np.empty(cap)
+    qy = np.empty(cap)
+    n = 0
+    pmax = 0.0
+    depth = 0.0
+    for f in range(F):
+        t = ftype[f]
+        vs, ve = vstart[f], vstart[f + 1]
+        # -- boundary nodes against the body
+        anyin = False
+        if t != _POINT:
+            for i in range(nbn):
+                sd, ox, oy = _body_sd(t, par[f], vs, ve, pv, pn, po, xb[i, 0], xb[i, 1])
+                if sd < 0:
+                    anyin = True
+                if -sd > pmax:
+                    pmax = -sd
+                if -sd > depth:
+                    depth = -sd
+                if emit and sd < radius:
+                    kind[n], finger[n], corner[n], element[n] = _NODE_BODY, f, -1, i
+                    na[n], nb[n], wa[n], wb[n] = i, i, 1.0, 0.0
+                    dx[n], dy[n], gap[n], qx[n], qy[n] = ox, oy, sd, xb[i, 0], xb[i, 1]
+                    n += 1
+        # -- corners (point finger, polygon corners) and a disc centre inside the part
+        ncorner = 0
+        if t == _POINT or t == _DISC:
+            ncorner = 1
+        elif t == _POLYGON:
+            ncorner = ve - vs
+        for k in range(ncorner):
+            if t == _POLYGON:
+                wx, wy, off = pv[vs + k, 0], pv[vs + k, 1], 0.0
+            else:
+                wx, wy = par[f, 0], par[f, 1]
+                off = par[f, 2] if t == _DISC else 0.0
+            inside, dmin = _inside_and_distance(wx, wy, xb, ea, eb)
+            if inside:
+                if dmin + off > depth:
+                    depth = dmin + off
+                if dmin + off > pmax:
+                    pmax = dmin + off
+            elif t == _DISC:
+                # a disc outside the part, no node inside it, against an edge whose foot
+                # point it faces: between two nodes a straight edge may cut the disc while
+                # both stay outside it (a mesh coarse for the disc); once a node is inside,
+                # the node rows of SPEC §6 see the disc
+                if anyin:
+                    continue
+                if emit:
+                    for e in range(ne):
+                        ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+                        ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+                        s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
+                        if s <= 0.0 or s >= 1.0:
+                            continue
+                        gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])
+                        if not (gl >= 0 and gl - off < radius):
+                            continue
+                        sa = _body_sd(t, par[f], vs, ve, pv, pn, po, ax, ay)[0]
+                        sb = _body_sd(t, par[f], vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
+                        if sa > 0 and sb > 0:
+                            kind[n], finger[n], corner[n], element[n] = _DISC_EDGE, f, -1, e
+                            na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
+                            dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], gl - off
+                            qx[n], qy[n] = ax + s * ex, ay + s * ey
+                            n += 1
+                else:
+                    for e in range(ne):
+                        ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+                        ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+                        s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
+                        if s <= 0.0 or s >= 1.0:
+                            continue
+                        gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])
+                        if gl >= 0 and off - gl > pmax:
+                            sa = _body_sd(t, par[f], vs, ve, pv, pn, po, ax, ay)[0]
+                            sb = _body_sd(t, par[f], vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
+                            if sa > 0 and sb > 0:
+                                pmax = off - gl
+                continue
+            if not emit:
+                continue
+            got = False
+            if inside:
+                # one edge among the nearest (within twice the distance to the boundary):
+                # the one the finger crosses least deeply — for a polygon the depth of the
+                # whole polygon past the edge's line (separating axes), so a finger corner
+                # passing a part's corner presses its side, not its end; none (the nearest
+                # boundary point a vertex): the vertex row below
+                best, bdepth, bgl, bs = -1, np.inf, 0.0, 0.0
+                for e in range(ne):
+                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+                    s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
+                    if s < 0.0 or s > 1.0:
+                        continue
+                    gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])   # > 0 outside
+                    if gl >= 0 or -gl > 2.0 * dmin + 1e-12 * np.sqrt(el2[e]):
+                        continue
+                    dep = -gl + off
+                    if t == _POLYGON:
+                        for j in range(vs, ve):
+                            dep = max(dep, (pv[j, 0] - ax) * en[e, 0] + (pv[j, 1] - ay) * en[e, 1])
+                    if dep < bdepth * (1 - 1e-12) or (dep <= bdepth * (1 + 1e-12) and gl > bgl):
+                        best, bdepth, bgl, bs = e, dep, gl, s
+                if best >= 0 and emit:
+                    e, s = best, bs
+                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+                    kind[n] = _CENTRE_EDGE if t == _DISC else _CORNER_EDGE
+                    finger[n], corner[n], element[n] = f, k, e
+                    na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
+                    dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], bgl - off
+                    qx[n], qy[n] = ax + s * ex, ay + s * ey
+                    n += 1
+                got = best >= 0
+            else:
+                for e in range(ne):
+                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+                    s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
+                    if s < 0.0 or s > 1.0:
+                        continue
+                    gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])   # > 0 outside
+                    if gl >= -1e-12 * np.sqrt(el2[e]) and gl < radius:
+                        kind[n] = _CORNER_EDGE
+                        finger[n], corner[n], element[n] = f, k, e
+                        na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
+                        dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], gl
+                        qx[n], qy[n] = ax + s * ex, ay + s * ey
+                        n += 1
+            for i in range(nbn):
+                rx, ry = xb[i, 0] - wx, xb[i, 1] - wy
+                d = np.hypot(rx, ry)
+                if d <= 0:
+                    continue
+                if inside:
+                    # nearest feature a vertex (no edge row): push that vertex past the corner
+                    ok = (not got) and d <= dmin * (1 + 1e-9) + 1e-12 * d
+                    gp = -d - off
+                    ux, uy = -rx / d, -ry / d
+                else:
+                    if not convex[i] or d >= radius:
+                        continue
+                    e1, e0 = enext[i], eprev[i]
+                    a1x, a1y = xb[ea[e1], 0], xb[ea[e1], 1]
+                    s1 = ((wx - a1x) * (xb[eb[e1], 0] - a1x) + (wy - a1y) * (xb[eb[e1], 1] - a1y)) / el2[e1]
+                    a0x, a0y = xb[ea[e0], 0], xb[ea[e0], 1]
+                    s0 = ((wx - a0x) * (xb[eb[e0], 0] - a0x) + (wy - a0y) * (xb[eb[e0], 1] - a0y)) / el2[e0]
+                    ok = s1 < 0 and s0 > 1      # in the vertex's normal cone
+                    gp = d
+                    ux, uy = rx / d, ry / d
+                if ok:
+                    kind[n], finger[n], corner[n], element[n] = _CORNER_NODE, f, k, i
+                    na[n], nb[n], wa[n], wb[n] = i, i, 1.0, 0.0
+                    dx[n], dy[n], gap[n], qx[n], qy[n] = ux, uy, gp, xb[i, 0], xb[i, 1]
+                    n += 1
+    return (n, kind, finger, corner, element, na, nb, wa, wb, dx, dy, gap, qx, qy, pmax, depth)
+
+
+# ----------------------------------------------------------------------------- LCP
+
+
+@njit(cache=True, nogil=True)
+def _lcp(W, q, free0):  # pragma: no cover - compiled
+    """Block principal pivoting for ``λ ≥ 0, w = Wλ + q ≥ 0, λᵀw = 0`` (W SPD).
+
+    ``free0``: initial guess of the rows with ``λ > 0`` (warm start). Returns
+    ``(λ, ok)``.
+    """
+    n = q.shape[0]
+    free = free0.copy()
+    lam = np.zeros(n)
+    qs = 1e-300
+    for i in range(n):
+        qs = max(qs, abs(q[i]))
+    ninf_best = n + 1
+    backup = 3
+    for _ in range(10 * n + 50):
+        m = 0
+        for i in range(n):
+            if free[i]:
+                m += 1
+        idx = np.empty(m, np.int64)
+        k = 0
+        for i in range(n):
+            if free[i]:
+                idx[k] = i
+                k += 1
+        lam[:] = 0.0
+        if m > 0:
+            A = np.empty((m, m))
+            b = np.empty(m)
+            for a in range(m):
+                for cc in range(m):
+                    A[a, cc] = W[idx[a], idx[cc]]
+                b[a] = -q[idx[a]]
+            sol = np.linalg.solve(A, b)
+            for a in range(m):
+                lam[idx[a]] = sol[a]
+        w = W @ lam + q
+        ls = 1e-300
+        for i in range(n):
+            ls = max(ls, abs(lam[i]))
+        ninf = 0
+        last = -1
+        for i in range(n):
+            bad = (free[i] and lam[i] < -1e-12 * ls) or ((not free[i]) and w[i] < -1e-12 * qs)
+            if bad:
+                ninf += 1
+                last = i
+        if ninf == 0:
+            for i in range(n):
+                lam[i] = max(lam[i], 0.0)
+            return lam, True
+        if ninf < ninf_best:
+            ninf_best = ninf
+            backup = 3
+            full = True
+        elif backup > 0:
+            backup -= 1
+            full = True
+        else:
+            full = False
+        if full:
+            for i in range(n):
+                if (free[i] and lam[i] < -1e-12 * ls) or ((not free[i]) and w[i] < -1e-12 * qs):
+                    free[i] = not free[i]
+        else:
+            free[last] = not free[last]       # Murty's single pivot: finite termination
+    for i in range(n):
+        lam[i] = max(lam[i], 0.0)
+    return lam, False
+
+
+@njit(cache=True, nogil=True)
+def _row_dofs(na, nb, wa, wb, dx, dy, ypos, sel):  # pragma: no cover - compiled
+    """Each selected row as 4 (dof of Y, coefficient) pairs."""
+    m = sel.shape[0]
+    dof = np.zeros((m, 4), np.int64)
+    cf = np.zeros((m, 4))
+    for r in range(m):
+        i = sel[r]
+        pa, pb = ypos[na[i]], ypos[nb[i]]
+        dof[r, 0], dof[r, 1], dof[r, 2], dof[r, 3] = 2 * pa, 2 * pa + 1, 2 * pb, 2 * pb + 1
+        cf[r, 0], cf[r, 1] = wa[i] * dx[i], wa[i] * dy[i]
+        cf[r, 2], cf[r, 3] = wb[i] * dx[i], wb[i] * dy[i]
+    return dof, cf
+
+
+@njit(cache=True, nogil=True)
+def _delassus(Y, dof, cf):  # pragma: no cover - compiled
+    m = dof.shape[0]
+    W = np.empty((m, m))
+    for r in range(m):
+        for s in range(r, m):
+            v = 0.0
+            for a in range(4):
+                ca = cf[r, a]
+                if ca == 0.0:
+                    continue
+                for b in range(4):
+                    cb = cf[s, b]
+                    if cb != 0.0:
+                        v += ca * cb * Y[dof[r, a], dof[s, b]]
+            W[r, s] = v
+            W[s, r] = v
+    return W
+
+
+@njit(cache=True, nogil=True)
+def _solve_placement(g, tol, depth_limit, e_cap, warm, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype,
+                     fpar, vstart, verts, vnorm, ypos, Y, cap):  # pragma: no cover - compiled
+    """Energy of one placement. Returns ``(E, status, grad(3), active keys, selected rows, λ,
+    gaps, dx, dy, px, py, na, nb, wa, wb, finger)`` (rows: indices into the scan; the rest
+    per selected row, part frame, local boundary node indices).
+
+    status: 0 no contact (E = 0), 1 solved, 2 inadmissible, 3 LCP not converged.
+    """
+    z = _scan(g, 0.0, False, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar, vstart,
+              verts, vnorm, 1)
+    pmax, depth = z[14], z[15]
+    grad = np.zeros(3)
+    empty_i = np.zeros(0, np.int64)
+    empty_f = np.zeros(0)
+    if depth > depth_limit:
+        return (np.inf, 2, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
+                empty_i, empty_i, empty_f, empty_f, empty_i)
+    if pmax <= tol:
+        return (0.0, 0, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
+                empty_i, empty_i, empty_f, empty_f, empty_i)
+    factor = 2.0
+    status = 1
+    lam = empty_f
+    sel = empty_i
+    W = np.zeros((0, 0))
+    key = empty_i
+    gap = empty_f
+    R = z
+    for attempt in range(8):
+        R = _scan(g, 2.0 * factor * pmax + tol, True, c, xb, ea, eb, en, el2, eprev, enext, convex,
+                  ftype, fpar, vstart, verts, vnorm, cap)
+        n = R[0]
+        kind, finger, corner, element = R[1][:n], R[2][:n], R[3][:n], R[4][:n]
+        na, nb, wa, wb, dx, dy, gap = R[5][:n], R[6][:n], R[7][:n], R[8][:n], R[9][:n], R[10][:n], R[11][:n]
+        nbn = xb.shape[0]
+        key = ((kind * 64 + finger) * 4096 + (corner + 1)) * (nbn + ea.shape[0] + 1) + element
+        cand = np.flatnonzero(gap < factor * pmax + tol)
+        sel = cand
+        dof, cf = _row_dofs(na, nb, wa, wb, dx, dy, ypos, sel)
+        W = _delassus(Y, dof, cf)
+        reg = 0.0
+        for i in range(W.shape[0]):
+            reg += W[i, i]
+        reg *= 1e-12 / max(W.shape[0], 1)
+        for i in range(W.shape[0]):
+            W[i, i] += reg
+        q = gap[sel] + tol
+        free0 = np.zeros(sel.shape[0], np.bool_)
+        for r in range(sel.shape[0]):
+            kk = key[sel[r]]
+            j = np.searchsorted(warm, kk)
+            if j < warm.shape[0] and warm[j] == kk:
+                free0[r] = True
+            elif q[r] < 0 and warm.shape[0] == 0:
+                free0[r] = True
+        lam, ok = _lcp(W, q, free0)
+        if not ok:
+            status = 3
+        # check the rows left out against the solution's displacement
+        rest = np.flatnonzero(gap >= factor * pmax + tol)
+        if rest.shape[0] == 0:
+            break
+        dof2, cf2 = _row_dofs(na, nb, wa, wb, dx, dy, ypos, rest)
+        worst = 0
+        for r in range(rest.shape[0]):
+            v = gap[rest[r]] + tol
+            for a in range(4):
+                if cf2[r, a] == 0.0:
+                    continue
+                for s in range(sel.shape[0]):
+                    if lam[s] == 0.0:
+                        continue
+                    for b in range(4):
+                        if cf[s, b] != 0.0:
+                            v += cf2[r, a] * Y[dof2[r, a], dof[s, b]] * cf[s, b] * lam[s]
+            if v < -tol:
+                worst += 1
+        if worst == 0:
+            break
+        factor *= 2.0
+    E = 0.5 * (lam @ (W @ lam))
+    if not E <= e_cap:
+        # beyond any small-strain state (contradictory contact rows: the finger cuts
+        # through the part): outside the model
+        return (np.inf, 2, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
+                empty_i, empty_i, empty_f, empty_f, empty_i)
+    # generalised force: dE/dg = −Σ λ_r [R d_r, (p_r − c) × d_r]
+    cph, sph = np.cos(g[2]), np.sin(g[2])
+    nact = 0
+    for s in range(sel.shape[0]):
+        if lam[s] > 0:
+            nact += 1
+            i = sel[s]
+            ddx, ddy = R[9][i], R[10][i]
+            grad[0] -= lam[s] * (cph * ddx - sph * ddy)
+            grad[1] -= lam[s] * (sph * ddx + cph * ddy)
+            grad[2] -= lam[s] * ((R[12][i] - c[0]) * ddy - (R[13][i] - c[1]) * ddx)
+    act = np.empty(nact, np.int64)
+    k = 0
+    for s in range(sel.shape[0]):
+        if lam[s] > 0:
+            act[k] = key[sel[s]]
+            k += 1
+    act = np.sort(act)
+    return (E, status, grad, act, sel, lam, gap[sel], R[9][sel], R[10][sel], R[12][sel], R[13][sel],
+            R[5][sel], R[6][sel], R[7][sel], R[8][sel], R[2][sel])
+
+
+@njit(cache=True, nogil=True)
+def _batch(G, tol, depth_limit, e_cap, chain, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar,
+           vstart, verts, vnorm, ypos, Y, cap):  # pragma: no cover - compiled
+    """Energies of many placements, each warm-started from the previous one (``chain``)."""
+    B = G.shape[0]
+    E = np.empty(B)
+    st = np.empty(B, np.int64)
+    warm = np.zeros(0, np.int64)
+    for b in range(B):
+        out = _solve_placement(G[b], tol, depth_limit, e_cap, warm, c, xb, ea, eb, en, el2, eprev, enext, convex,
+                               ftype, fpar, vstart, verts, vnorm, ypos, Y, cap)
+        E[b] = out[0]
+        st[b] = out[1]
+        if chain:
+            warm = out[3]
+    return E, st
+
+
+# ----------------------------------------------------------------------------- Python API
+
+
+@dataclass(frozen=True)
+class PlacementState:
+    """Contact solution of one placement.
+
+    Attributes
+    ----------
+    placement : ndarray (3,)
+        ``(x, y, φ)``: translation of the area centroid (m) and rotation about it (rad).
+    energy : float
+        Contact energy (J); ``inf`` when inadmissible.
+    status : str
+        ``"free"`` (no finger presses), ``"contact"``, ``"inadmissible"`` (a finger deeper
+        than the model allows) or ``"unconverged"`` (the LCP stopped at its budget).
+    gradient : ndarray (3,)
+        ``dE/dg`` (N, N, N m): minus the force and moment the fingers exert on the part.
+    active : ndarray of int
+        Identity keys of the pressing contact rows (for warm starts).
+    forces : ndarray (k, 2)
+        Contact forces on the part (N), part frame, one per pressing row.
+    points : ndarray (k, 2)
+        Their material points on the part at rest (m, part frame).
+    nodes, weights : ndarray (k, 2)
+        Mesh nodes carrying each force and their shares (an edge row splits its force
+        between the edge's end nodes).
+    fingers : ndarray (k,) of int
+        The finger exerting each force.
+    """
+
+    placement: np.ndarray
+    energy: float
+    status: str
+    gradient: np.ndarray
+    active: np.ndarray
+    forces: np.ndarray
+    points: np.ndarray
+    nodes: np.ndarray
+    weights: np.ndarray
+    fingers: np.ndarray = None  # type: ignore[assignment]
+
+
+_STATUS = {0: "free", 1: "contact", 2: "inadmissible", 3: "unconverged"}
+_NO_KEYS = np.zeros(0, np.int64)
+
+
+def disc_axes(mesh: Any, fingers: Sequence[Finger]) -> np.ndarray:
+    """Pressing direction of every disc finger (unit, world frame; zeros for others).
+
+    A disc presses like a round pad (SPEC §6) along its *axis*, fixed to the finger. A
+    disc overlapping the part at rest (pre-squeeze) presses from its part outside the
+    part towards its part inside: the axis joins the centroids of the two (a disc seated
+    in a V-notch presses along the notch's bisector, even when pressed past its centre).
+    A disc that only touches, or misses, presses towards the nearest boundary nodes: the
+    weighted mean of the unit vectors from its centre to the nodes within a quarter
+    radius of the nearest one (weights falling linearly to zero there).
+    """
+    import shapely
+
+    rings = [np.asarray(mesh.nodes, float)[np.asarray(lp)] for lp in mesh.loops]
+    poly = shapely.Polygon(rings[0], rings[1:])
+    P = np.concatenate(rings)
+    out = np.zeros((len(fingers), 2))
+    for i, f in enumerate(fingers):
+        if not isinstance(f, DiscFinger):
+            continue
+        c = np.asarray(f.center, float)
+        disc = shapely.Point(c).buffer(f.radius, quad_segs=64)
+        inside = disc.intersection(poly)
+        if inside.area > 1e-6 * disc.area:
+            outside = disc.difference(poly)
+            co = np.asarray(outside.centroid.coords[0]) if outside.area > 0 else c
+            v = np.asarray(inside.centroid.coords[0]) - co
+            nv = float(np.linalg.norm(v))
+            if nv > 1e-9 * f.radius:
+                out[i] = v / nv
+                continue
+        rel = P - c
+        d = np.linalg.norm(rel, axis=1)
+        band = d.min() + 0.25 * f.radius
+        w = np.clip(band - d, 0.0, None)
+        v = (w[:, None] * rel / np.maximum(d, 1e-300)[:, None]).sum(axis=0)
+        nv = float(np.linalg.norm(v))
+        out[i] = v / nv if nv > 0 else rel[np.argmin(d)] / max(d.min(), 1e-300)
+    return out
+
+
+def _encode(fingers: Sequence[Finger], axes: np.ndarray):
+    F = len(fingers)
+    ftype = np.zeros(F, np.int64)
+    fpar = np.zeros((F, 6))
+    vstart = np.zeros(F + 1, np.int64)
+    verts, vnorm = [], []
+    for i, f in enumerate(fingers):
+        if isinstance(f, PointFinger):
+            ftype[i] = _POINT
+            fpar[i, :2] = f.at
+        elif isinstance(f, DiscFinger):
+            ftype[i] = _DISC
+            fpar[i, :3] = (*f.center, f.radius)
+            fpar[i, 3:5] = axes[i]
+            fpar[i, 5] = f.radius * np.sin(FLANK_ANGLE)
+        elif isinstance(f, HalfPlaneFinger):
+            ftype[i] = _HALFPLANE
+            fpar[i, :4] = (*f.point, *f.normal)
+        elif isinstance(f, PolygonFinger):
+            ftype[i] = _POLYGON
+            v = f.vertices
+            fpar[i, :2] = v.mean(axis=0)
+            verts.append(v)
+            vnorm.append(f.normals)
+        else:
+            raise TypeError(f"unknown finger {f!r}")
+        vstart[i + 1] = vstart[i] + (len(verts[-1]) if isinstance(f, PolygonFinger) else 0)
+    verts = np.concatenate(verts) if verts else np.zeros((0, 2))
+    vnorm = np.concatenate(vnorm) if vnorm else np.zeros((0, 2))
+    return ftype, fpar, vstart, np.ascontiguousarray(verts, float), np.ascontiguousarray(vnorm, float)
+
+
+class PlacementEnergy:
+    """Contact energy ``E(g)`` of a part among fixed fingers, for any placement ``g``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The part at rest (m), with its material.
+    fingers : sequence of Finger
+        Fixed fingers (m), in the frame of the part at rest.
+    solver : PadContact, optional
+        Reuse a factorisation of this mesh (its ``Y`` and centroid).
+    centroid : array_like (2,), optional
+        Reference point of the rotation (m); default the solver's area centroid. A second
+        mesh realisation of the same part must use the first one's.
+    tol : float, optional
+        Touching tolerance (m), default ``1e-9`` × the diameter.
+    max_depth_ratio : float
+        Placements where a finger reaches deeper than this fraction of the part's largest
+        inscribed radius are inadmissible.
+    disc_axes_ : array_like (n_fingers, 2), optional
+        Pressing axes of the disc fingers (world frame); default :func:`disc_axes`. A
+        second mesh realisation must use the first one's.
+
+    Examples
+    --------
+    >>> pe = PlacementEnergy(mesh, fingers)           # doctest: +SKIP
+    >>> pe.energy([0.0, 1e-4, 0.01]).energy           # doctest: +SKIP
+    """
+
+    def __init__(self, mesh: Any, fingers: Sequence[Finger], *, solver: Any = None,
+                 centroid: Any = None, tol: float | None = None,
+                 max_depth_ratio: float = MAX_DEPTH_RATIO, disc_axes_: Any = None) -> None:
+        from ..pads.contact import PadContact
+
+        self.mesh = mesh
+        self.fingers = tuple(fingers)
+        self.solver = PadContact(mesh) if solver is None else solver
+        self.centroid = np.asarray(self.solver.centroid if centroid is None else centroid, float)
+        self.tol = touch_tolerance(mesh) if tol is None else float(tol)
+        self.diameter = float(mesh.diameter)
+        self.inscribed_radius = inscribed_radius(mesh)
+        self.depth_limit = float(max_depth_ratio) * self.inscribed_radius
+        mat = getattr(mesh, "material", None)
+        # energy of a unit strain everywhere: no small-strain state comes near it
+        self.energy_cap = (0.5 * mat.youngs_modulus * mat.thickness * mesh.area if mat is not None
+                           else np.inf)
+        bd = BoundaryModel(mesh)
+        nodes = bd.nodes
+        self.nodes = nodes
+        local = np.full(mesh.n_nodes, -1, np.int64)
+        local[nodes] = np.arange(len(nodes))
+        self._xb = np.ascontiguousarray(mesh.nodes[nodes], float)
+        self._ea = local[bd.edges[:, 0]]
+        self._eb = local[bd.edges[:, 1]]
+        self._en = np.ascontiguousarray(bd.inward_normals(np.asarray(mesh.nodes, float)))
+        ab = self._xb[self._eb] - self._xb[self._ea]
+        self._el2 = np.einsum("ij,ij->i", ab, ab)
+        self._enext = bd.edge_of[nodes].copy()
+        self._eprev = bd.edge_of[bd.prev[nodes]].copy()
+        from .obstacles import CONVEX
+
+        self._convex = bd.feature[nodes] == CONVEX
+        self._ypos = np.asarray(self.solver.cc.position(nodes), np.int64)
+        self._Y = np.ascontiguousarray(self.solver.Y)
+        self.disc_axes = (disc_axes(mesh, self.fingers) if disc_axes_ is None
+                          else np.asarray(disc_axes_, float).reshape(len(self.fingers), 2))
+        self._fing = _encode(self.fingers, self.disc_axes)
+        nc = sum(len(f.vertices) for f in self.fingers) + sum(isinstance(f, DiscFinger) for f in self.fingers)
+        n_body = sum(f.has_interior for f in self.fingers)
+        self._cap = int(n_body * len(nodes) + nc * (len(nodes) + len(self._ea)) + 8)
+        # convex hull of the part at rest (part frame), for the escape test
+        import shapely
+
+        hull = shapely.Polygon(mesh.nodes[mesh.outer_loop]).convex_hull
+        self.hull = np.asarray(hull.exterior.coords)[:-1]
+        self.radius = float(np.linalg.norm(self._xb - self.centroid, axis=1).max())
+
+    # ---------------------------------------------------------------- kernels
+    def _args(self):
+        ftype, fpar, vstart, verts, vnorm = self._fing
+        return (self.centroid, self._xb, self._ea, self._eb, self._en, self._el2, self._eprev,
+                self._enext, self._convex, ftype, fpar, vstart, verts, vnorm)
+
+    def energy(self, g: Any, warm: np.ndarray | None = None) -> PlacementState:
+        """Contact solution at placement ``g = (x, y, φ)`` (m, m, rad).
+
+        ``warm``: active keys of a nearby placement (:attr:`PlacementState.active`).
+        """
+        g = np.asarray(g, float).reshape(3)
+        w = np.zeros(0, np.int64) if warm is None else np.asarray(warm, np.int64)
+        out = _solve_placement(g, self.tol, self.depth_limit, self.energy_cap, w, *self._args(), self._ypos,
+                               self._Y, self._cap)
+        E, st, grad, act, sel, lam, gap, dx, dy, px, py, na, nb, wa, wb, fi = out
+        pos = lam > 0
+        lp = lam[pos]
+        forces = np.stack([lp * dx[pos], lp * dy[pos]], axis=1)
+        return PlacementState(g.copy(), float(E), _STATUS[int(st)], grad, act, forces,
+                              np.stack([px[pos], py[pos]], axis=1),
+                              self.nodes[np.stack([na[pos], nb[pos]], axis=1)],
+                              np.stack([wa[pos], wb[pos]], axis=1), fi[pos])
+
+    def energy_and_active(self, g: Any, warm: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """Energy (J) at ``g`` and the active keys (for warm starts): :meth:`energy`
+        without building the state (the landscape's inner loop)."""
+        out = _solve_placement(np.asarray(g, float), self.tol, self.depth_limit, self.energy_cap,
+                               _NO_KEYS if warm is None else warm, *self._args(), self._ypos, self._Y,
+                               self._cap)
+        return float(out[0]), out[3]
+
+    def load_vector(self, state: PlacementState) -> np.ndarray:
+        """Global load vector (N, part frame), shape ``(2n,)``, of a state's contact forces."""
+        f = np.zeros(2 * self.mesh.n_nodes)
+        for j in range(2):
+            w = state.weights[:, j, None] * state.forces
+            np.add.at(f, 2 * state.nodes[:, j], w[:, 0])
+            np.add.at(f, 2 * state.nodes[:, j] + 1, w[:, 1])
+        return f
+
+    def displacement(self, state: PlacementState) -> np.ndarray:
+        """Deformation (m, part frame, no rigid part), shape ``(n, 2)``, of a state."""
+        return self.solver.displacement(self.load_vector(state)).reshape(-1, 2)
+
+    def energies(self, G: Any, chain: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """Energies (J) of many placements ``G (B, 3)``; each solve is warm-started from
+        the previous one when ``chain`` (order ``G`` along a grid line for speed).
+
+        Returns ``(E, status)``, status codes 0 free, 1 contact, 2 inadmissible,
+        3 unconverged.
+        """
+        G = np.ascontiguousarray(np.asarray(G, float).reshape(-1, 3))
+        return _batch(G, self.tol, self.depth_limit, self.energy_cap, bool(chain), *self._args(), self._ypos,
+                      self._Y, self._cap)
+
+    # ---------------------------------------------------------------- placement geometry
+    def place(self, g: Any, points: Any) -> np.ndarray:
+        """World coordinates (m) of part-frame ``points (k, 2)`` at placement ``g``."""
+        g = np.asarray(g, float)
+        c, s = np.cos(g[2]), np.sin(g[2])
+        R = np.array([[c, -s], [s, c]])
+        return (np.asarray(points, float) - self.centroid) @ R.T + self.centroid + g[:2]
+
+    def escapable(self, g: Any, n_directions: int = 32, angle0: float = 0.0) -> bool:
+        """Whether the part at ``g`` can translate to infinity, in one of ``n_directions``
+        directions, without entering any finger (touching allowed). Tested on the part's
+        convex hull (separating axes), so it errs on the side of "not yet free". The
+        directions start at ``angle0`` (rad)."""
+        H = self.place(g, self.hull)
+        ang = angle0 + np.linspace(0.0, 2 * np.pi, n_directions, endpoint=False)
+        D = np.c_[np.cos(ang), np.sin(ang)]
+        tol = 10.0 * self.tol
+        e = np.roll(H, -1, axis=0) - H
+        hn = np.c_[e[:, 1], -e[:, 0]]
+        hn /= np.linalg.norm(hn, axis=1, keepdims=True)
+        clear = np.ones(len(D), bool)
+        for f in self.fingers:
+            if isinstance(f, HalfPlaneFinger):
+                n = np.asarray(f.normal)
+                ok = float(((H - np.asarray(f.point)) @ n).min()) >= -tol
+                clear &= ok & (D @ n >= -1e-12)
+                continue
+            if isinstance(f, PointFinger):
+                P = np.asarray(f.vertices, float)
+                pn = np.zeros((0, 2))
+            elif isinstance(f, DiscFinger):
+                k = 16
+                t = np.linspace(0, 2 * np.pi, k, endpoint=False)
+                P = np.asarray(f.center) + (f.radius / np.cos(np.pi / k)) * np.c_[np.cos(t), np.sin(t)]
+                pn = np.c_[np.cos(t + np.pi / k), np.sin(t + np.pi / k)]
+            else:
+                P = f.vertices
+                pn = f.normals
+            for j, d in enumerate(D):
+                if not clear[j]:
+                    continue
+                axes = np.vstack([hn, pn, [[-d[1], d[0]]]])
+                hp = H @ axes.T                       # (h, a)
+                lo, hi = hp.min(axis=0), hp.max(axis=0)
+                ad = axes @ d
+                hi = np.where(ad > 1e-12, np.inf, hi)
+                lo = np.where(ad < -1e-12, -np.inf, lo)
+                fp = P @ axes.T
+                flo, fhi = fp.min(axis=0), fp.max(axis=0)
+                if not np.any((fhi <= lo + tol) | (flo >= hi - tol)):
+                    clear[j] = False
+        return bool(clear.any())
