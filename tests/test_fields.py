@@ -127,3 +127,48 @@ def test_bad_field_file_is_refused_before_the_work(tmp_path, capsys):
                  str(tmp_path / "f.png")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: --export-fields") and err.count("\n") == 1
+
+
+def test_check_fields_at_the_equilibrium(tmp_path):
+    """Contact forces balance, and their work on the elastic displacement is twice the
+    equilibrium energy of the report (Clapeyron); the strain of the file is that of the
+    elastic displacement, independent of the rigid rotation that places the nodes."""
+    out, rep = tmp_path / "c.vtu", tmp_path / "c.json"
+    assert main(["check", str(ROOT / "examples" / "l_shape.json"), "--fingers",
+                 str(ROOT / "examples" / "fingers" / "l_shape.json"), "--grid-steps", "16",
+                 "--saddle-levels", "0", "--export-fields", str(out), "-o", str(rep), "-q"]) == 0
+    report = json.loads(rep.read_text())
+    m = meshio.read(out)
+    f = m.point_data["contact_force"][:, :2]
+    np.testing.assert_allclose(f.sum(axis=0), 0, atol=1e-9 * np.abs(f).max())
+    mesh = read_mesh(out)                    # the file's own mesh: deformed nodes
+    rest = m.point_data["rest_position"][:, :2]
+    eps = m.cell_data["strain"][0]
+    assert np.abs(eps).max() > 0
+    energy = report["energy"]
+    # strain energy of the file's strains, by hand (CST): ½ Σ A t εᵀ D ε
+    mat = mesh.material
+    E, nu, t = mat.youngs_modulus, mat.poisson_ratio, mat.thickness
+    if mat.plane == "strain":      # plane strain: E' = E/(1-ν²), ν' = ν/(1-ν)
+        E, nu = E / (1 - nu**2), nu / (1 - nu)
+    D = E / (1 - nu**2) * np.array([[1, nu, 0], [nu, 1, 0], [0, 0, (1 - nu) / 2]])
+    tri = m.cells_dict["triangle"]
+    a, b, c = rest[tri[:, 0]], rest[tri[:, 1]], rest[tri[:, 2]]
+    area = 0.5 * np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1]))
+    eng = eps * np.array([1, 1, 2])
+    U = 0.5 * t * np.sum(area * np.einsum("ki,ij,kj->k", eng, D, eng))
+    assert U == pytest.approx(energy, rel=1e-9)
+
+
+def test_slice_fields_equal_the_slice_arrays(tmp_path):
+    out, npz = tmp_path / "s.vtu", tmp_path / "s.npz"
+    assert main(["slice", str(RECT), "--node", "5", "--fingers",
+                 str(ROOT / "examples" / "fingers" / "rectangle.json"), "--resolution", "24",
+                 "--export-fields", str(out), "-o", str(npz), "-q"]) == 0
+    m, arrays = meshio.read(out), np.load(npz)
+    np.testing.assert_array_equal(m.point_data["energy"], arrays["energy"].ravel())
+    np.testing.assert_array_equal(m.point_data["d_free"].astype(bool), arrays["free"].ravel())
+    X, Y = np.meshgrid(arrays["xs"], arrays["ys"])
+    np.testing.assert_array_equal(m.points[:, 0], X.ravel())
+    np.testing.assert_array_equal(m.points[:, 1], Y.ravel())
+    assert m.cells_dict["quad"].shape == (23 * 23, 4)

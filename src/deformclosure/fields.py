@@ -30,7 +30,8 @@ import numpy as np
 
 from .errors import DeformClosureError
 
-__all__ = ["FieldState", "FIELD_FORMATS", "field_paths", "state_data", "write_fields"]
+__all__ = ["FieldState", "FIELD_FORMATS", "field_paths", "state_data", "write_fields",
+           "write_slice_fields"]
 
 #: Suffixes ``--export-fields`` writes (meshio formats keeping point and cell data).
 FIELD_FORMATS = (".vtu", ".vtk")
@@ -48,11 +49,16 @@ class FieldState:
         Node displacements (m).
     forces : ndarray, shape (n, 2)
         Contact forces on the nodes (N); zeros where nothing touches.
+    elastic : ndarray, optional
+        The displacement whose linear strains are the state's (m); default
+        ``displacement``. A part that also turns (``check``) places its nodes by the
+        exact rotation but strains by the elastic part only.
     """
 
     label: str
     displacement: np.ndarray
     forces: np.ndarray
+    elastic: np.ndarray | None = None
 
 
 def field_paths(path: str | Path, labels: list[str]) -> list[Path]:
@@ -99,7 +105,8 @@ def state_data(mesh, state: FieldState, ell: float) -> tuple[dict, dict]:
     n = mesh.n_nodes
     u = np.asarray(state.displacement, float).reshape(n, 2)
     f = np.asarray(state.forces, float).reshape(n, 2)
-    eng = element_strains(mesh, u.ravel())                 # [exx, eyy, gamma_xy]
+    ue = u if state.elastic is None else np.asarray(state.elastic, float).reshape(n, 2)
+    eng = element_strains(mesh, ue.ravel())                # [exx, eyy, gamma_xy]
     avg = averaged_strains(mesh, eng, ell)
     mag = np.abs(principal_strains(eng)).max(axis=1)
     mag_avg = np.abs(principal_strains(avg)).max(axis=1)
@@ -144,3 +151,32 @@ def write_fields(path: str | Path, mesh, states: list[FieldState], ell: float) -
         except OSError as err:
             raise DeformClosureError(f"--export-fields {p}: cannot write ({err.strerror})") from None
     return paths
+
+
+def write_slice_fields(path: str | Path, result) -> Path:
+    """A D-space slice (``slice``) as an image for ParaView: the grid of positions of the
+    moving node (pixel centres, m) joined into quads, with point data ``energy`` (J),
+    ``d_free`` and ``d_t`` (1 inside, 0 outside) and ``obstacle_<k>`` for each finger."""
+    import meshio
+
+    from .outputs import atomic_path
+
+    check_field_path(path)
+    xs, ys = np.asarray(result.xs, float), np.asarray(result.ys, float)
+    nx, ny = len(xs), len(ys)
+    X, Y = np.meshgrid(xs, ys)                        # row iy = ys[iy], as the images
+    pts = np.column_stack([X.ravel(), Y.ravel(), np.zeros(nx * ny)])
+    idx = np.arange(nx * ny).reshape(ny, nx)
+    quads = np.column_stack([idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(),
+                             idx[1:, 1:].ravel(), idx[1:, :-1].ravel()])
+    data = {"energy": np.asarray(result.energy, float).ravel(),
+            "d_free": np.asarray(result.free, float).ravel(),
+            "d_t": np.asarray(result.in_dt, float).ravel()}
+    for k, ob in enumerate(np.asarray(result.obstacles)):
+        data[f"obstacle_{k}"] = ob.astype(float).ravel()
+    try:
+        with atomic_path(path) as tmp:
+            meshio.write_points_cells(tmp, pts, [("quad", quads)], point_data=data)
+    except OSError as err:
+        raise DeformClosureError(f"--export-fields {path}: cannot write ({err.strerror})") from None
+    return Path(path)

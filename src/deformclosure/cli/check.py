@@ -71,17 +71,24 @@ def contact_points(part, fingers) -> np.ndarray:
                    "the smallest disc radius per step).")
 @click.option("--saddle-levels", type=int, default=2, show_default=True,
               help="Release landscape: halvings of the lattice near the saddle (error estimate).")
+@click.option("--export-fields", type=click.Path(dir_okay=False), default=None,
+              help="Write the fields at the equilibrium to FILE.vtu for ParaView: deformed "
+                   "mesh, displacement, strain, contact pressure.")
 @mesh_input_options()
 def command(part: str, finger_file: str, output: str | None, plot: str | None,
-            grid_steps: int, saddle_levels: int, material: str | None, units: str | None) -> int:
+            grid_steps: int, saddle_levels: int, export_fields: str | None,
+            material: str | None, units: str | None) -> int:
     """Deform closure of a contact set: release energy U_A and escape path, equilibrium,
     contact forces, rigid-closure order and certificate.
 
     PART is a part file (JSON) or a mesh file.
     """
+    from ..fields import check_field_path
     from ..outputs import check_outputs
 
-    check_outputs([output, plot], [], [part, finger_file])
+    if export_fields is not None:
+        check_field_path(export_fields)
+    check_outputs([output, plot, export_fields], [], [part, finger_file])
     if not (8 <= grid_steps <= 1000):
         raise DeformClosureError(f"--grid-steps = {grid_steps}: give a whole number from 8 to 1000")
     if not (0 <= saddle_levels <= 4):
@@ -89,16 +96,19 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None,
     from ..dspace.closure import deform_closure
     from ..dspace.fingers import load_fingers
     from ..mesh.io import is_mesh_file
-    from ..part import Part
 
     fingers = load_fingers(finger_file)
     p = Path(part)
     if not p.exists():
         raise DeformClosureError(f"{part}: file not found; give a part file (.json) or a mesh file")
-    pts = None
-    if not is_mesh_file(p):
-        pts = contact_points(Part.from_file(p), fingers)
-    part_obj, mesh = load_part_or_mesh(p, points=pts, units=units, material=material)
+    if is_mesh_file(p):
+        part_obj, mesh = load_part_or_mesh(p, units=units, material=material)
+    else:
+        from ..mesh import mesh_part
+        from .common import read_part
+
+        part_obj = read_part(p, units, material)
+        mesh = mesh_part(part_obj, points=contact_points(part_obj, fingers))
     check_model_size(mesh, "pads", solvers=2 if part_obj is None else 3, what="check")
     res = deform_closure(mesh, fingers)
     from ..dspace.escape import release_energy_fingers
@@ -139,6 +149,15 @@ def command(part: str, finger_file: str, output: str | None, plot: str | None,
         click.echo(f"escaping twist: v = ({t[0]:.4g}, {t[1]:.4g}) m/s, omega = {t[2]:.4g} rad/s "
                    "(about the area centroid)")
     write_json(report, output)
+    if export_fields:
+        from ..fields import FieldState, write_fields
+        from ..pads.limit import critical_distance_of
+
+        eq = res.equilibrium
+        state = FieldState("equilibrium", np.asarray(eq.q) - mesh.nodes, eq.nodal_forces,
+                           elastic=eq.displacement)
+        for pth in write_fields(export_fields, mesh, [state], critical_distance_of(mesh)):
+            click.echo(f"wrote {pth}")
     if plot:
         from ..plotting.escape import plot_check_and_escape
         from ..plotting.mesh import save_figure

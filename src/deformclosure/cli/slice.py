@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import DeformClosureError
 from ..limits import MAX_SLICE_RESOLUTION, limits_help
-from .common import load_part_or_mesh, parse_xy
+from .common import load_part_or_mesh, mesh_input_options, parse_xy
 
 __all__ = ["command"]
 
@@ -35,18 +35,27 @@ files). -o writes .npz arrays or, for a .json name, a JSON report; both SI.
               help=f"Pixels per axis (2..{MAX_SLICE_RESOLUTION:,}).")
 @click.option("--energy", type=click.Choice(["linear", "corotational"]), default="linear", show_default=True)
 @click.option("--units", type=click.Choice(["m", "cm", "mm", "in"]), default=None,
-              help="Units of --at and --extent.")
+              help="Units of --at and --extent, and of a meshio file's coordinates.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None, help="Write .npz or .json.")
 @click.option("--plot", type=click.Path(dir_okay=False), default=None, help="Draw the slice (PNG/SVG).")
+@click.option("--export-fields", type=click.Path(dir_okay=False), default=None,
+              help="Write the slice as an image for ParaView (.vtu): energy, D_free, D_T and "
+                   "each D-obstacle over the positions of the moving node.")
+@mesh_input_options(units=False)
 def command(part: str, node: int | None, at: str | None, finger_file: str, extent: str | None,
-            resolution: int, energy: str, units: str | None, output: str | None, plot: str | None) -> int:
+            resolution: int, energy: str, units: str | None, output: str | None, plot: str | None,
+            export_fields: str | None, material: str | None) -> int:
     """D_free membership and energy while one node moves and all others stay.
 
     PART is a part file (JSON) or a mesh file.
     """
     from ..outputs import check_outputs
 
-    check_outputs([output, plot], [], [part, finger_file])
+    from ..fields import check_field_path
+
+    if export_fields is not None:
+        check_field_path(export_fields)
+    check_outputs([output, plot, export_fields], [], [part, finger_file])
     from ..dspace.fingers import load_fingers
     from ..dspace.slices import dfree_slice
     from ..units import length_scale
@@ -56,7 +65,7 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
 
     check_slice_size(resolution, len(fingers),         # before the part is even meshed
                      json_output=bool(output) and str(output).lower().endswith(".json"))
-    part_obj, mesh = load_part_or_mesh(part)
+    part_obj, mesh = load_part_or_mesh(part, units=units, material=material)
     unit = units if units is not None else (part_obj.units if part_obj is not None else "m")
     s = length_scale(unit, "--units")
     if (node is None) == (at is None):
@@ -77,8 +86,6 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
         if not all(np.isfinite(ext)) or max(abs(v) for v in ext) > reach:
             raise DeformClosureError(f"--extent {extent}: must be finite and within 100 part "
                                      "diameters of the part; check the values and --units")
-    if mesh.material is None:
-        raise DeformClosureError(f"{part}: the mesh has no material; add one to the mesh file")
     res = dfree_slice(mesh, None, node, fingers, extent=ext, resolution=resolution, energy=energy)
     click.echo(f"node {node}: {resolution}x{resolution} slice, D_free {100 * res.free.mean():.1f}% of pixels, "
                f"D_T {100 * res.in_dt.mean():.1f}%, {energy} energy {res.energy.min():.4g}..{res.energy.max():.4g} J")
@@ -87,6 +94,10 @@ def command(part: str, node: int | None, at: str | None, finger_file: str, exten
             res.save(output)
         except OSError as err:
             raise DeformClosureError(f"{output}: cannot write ({err.strerror})") from None
+    if export_fields:
+        from ..fields import write_slice_fields
+
+        click.echo(f"wrote {write_slice_fields(export_fields, res)}")
     if plot:
         from ..plotting.dspace import plot_slice
         from ..plotting.mesh import new_figure, save_figure
