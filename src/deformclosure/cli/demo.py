@@ -105,10 +105,8 @@ def command(out_dir: str) -> int:
     for key in ("notched_bar", "block"):
         fine = results[key].finest
         mesh = mesh_part(cases[0][1] if key == "notched_bar" else cases[1][1])
-        ax = plot_pad_grasp(fine, mesh, units="mm")
-        save_figure(ax.figure, out / f"{key}.png")
-        ax = plot_pad_quality(fine, units="mm")
-        save_figure(ax.figure, out / f"{key}_quality.png")
+        save_figure(plot_pad_grasp(fine, mesh, units="mm"), out / f"{key}.png")
+        save_figure(plot_pad_quality(fine, units="mm"), out / f"{key}_quality.png")
         fig_paths += [out / f"{key}.png", out / f"{key}_quality.png"]
     for pth in [*fig_paths, out / "report.json"]:
         click.echo(f"wrote {pth}")

@@ -115,8 +115,8 @@ def _pads(part, pad_radius, pad_width, grid_angles, grid_offsets, top, units, ou
 
         out = Path(plot)
         out.mkdir(parents=True, exist_ok=True)
-        ax = plot_pad_plan(res, mesh, units=unit if unit != "m" else "mm")
-        save_figure(ax.figure, out / "top_axes.png")
+        save_figure(plot_pad_plan(res, mesh, units=unit if unit != "m" else "mm"),
+                    out / "top_axes.png")
         click.echo(f"wrote {out / 'top_axes.png'}")
     return 0
 

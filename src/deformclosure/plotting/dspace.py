@@ -79,7 +79,7 @@ def plot_fingers(fingers: Sequence[Any], ax: Any = None, units: str = "m",
             anchor = f.probe_point() / s if f.probe_point() is not None else np.asarray(f.point) / s
         if labels:
             ax.annotate(f"F{i}", anchor, textcoords="offset points", xytext=(4, 4), fontsize=8, zorder=6)
-    return ax
+    return ax.figure
 
 
 def _outline(ax: Any, mesh: Any, x: np.ndarray, s: float, **kw: Any) -> None:
@@ -122,7 +122,7 @@ def plot_configuration(mesh: Any, q: Any = None, ax: Any = None, units: str = "m
     ax.set_aspect("equal")
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    return ax
+    return ax.figure
 
 
 def plot_slice(result: Any, mesh: Any = None, fingers: Sequence[Any] = (), ax: Any = None, units: str = "m",
@@ -177,7 +177,7 @@ def plot_slice(result: Any, mesh: Any = None, fingers: Sequence[Any] = (), ax: A
     ax.set_ylabel(f"y of node {result.node} ({units})")
     ax.set_title(f"D-space slice: D_free (light), D-obstacles (red), not D_T (grey); {result.energy_kind} U (J)",
                  fontsize=8)
-    return ax
+    return ax.figure
 
 
 def plot_check(mesh: Any, result: Any, fingers: Sequence[Any], ax: Any = None, units: str = "m") -> Any:
@@ -237,4 +237,4 @@ def plot_check(mesh: Any, result: Any, fingers: Sequence[Any], ax: Any = None, u
     ax.set_title(f"{verdict}, order {result.order}; U = {result.energy:.3g} J (linear)", fontsize=9)
     ax.set_xlim(bounds[0], bounds[1])
     ax.set_ylim(bounds[2], bounds[3])
-    return ax
+    return ax.figure

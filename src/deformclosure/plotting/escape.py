@@ -81,7 +81,7 @@ def plot_escape_path(mesh: Any, rel: Any, fingers: Sequence[Any], ax: Any = None
     ax.set_ylabel(f"y ({units})")
     end = {"released": "released", "equilibrium": "another equilibrium"}.get(rel.target, "no release")
     ax.set_title(f"escape path ({len(P)} placements, to {end}); saddle in red", fontsize=9)
-    return ax
+    return ax.figure
 
 
 def plot_escape_energy(rel: Any, ax: Any = None, units: str = "m") -> Any:
@@ -107,7 +107,7 @@ def plot_escape_energy(rel: Any, ax: Any = None, units: str = "m") -> Any:
     ax.set_xlabel(f"path length ({units}; rotation × {rel.grid.h / rel.grid.h_phi / s:.3g} {units}/rad)")
     ax.set_ylabel("energy (J)")
     ax.grid(alpha=0.3)
-    return ax
+    return ax.figure
 
 
 def plot_check_and_escape(mesh: Any, closure: Any, rel: Any, fingers: Sequence[Any], units: str = "m") -> Any:

@@ -26,7 +26,8 @@ def plot_quality_curve(analysis, ax=None, units: str = "mm"):
 
     Returns
     -------
-    Axes
+    matplotlib.figure.Figure
+        The figure holding ``ax`` (compose it with others, or save it).
     """
     if ax is None:
         _, ax = new_figure((7, 4.5))
@@ -53,7 +54,7 @@ def plot_quality_curve(analysis, ax=None, units: str = "mm"):
     ax.set_ylabel("energy (mJ)")
     ax.set_title(f"jaws at nodes {analysis.jaws[0]}, {analysis.jaws[1]} ({sep.method})")
     ax.legend(fontsize=8)
-    return ax
+    return ax.figure
 
 
 def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
@@ -84,7 +85,7 @@ def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
                  f"{strain.max():.3g} (e_L = {mesh.material.elastic_limit_strain:g})"
                  if mesh.material is not None else f"deformed at σ = {sigma * s:.4g} {units}")
     ax.legend(loc="upper right", fontsize=8)
-    return ax
+    return ax.figure
 
 
 def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | None = None):
@@ -139,7 +140,7 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
     ax.set_aspect("equal")
     ax.set_title(f"energy landscape at σ = {sigma * s:.4g} {units}")
     ax.legend(fontsize=8, loc="upper left")
-    return ax
+    return ax.figure
 
 
 def save_grasp_plots(analysis, out_dir: str | Path, units: str = "mm") -> list[Path]:
@@ -272,7 +273,7 @@ def plot_quality_map(plan, ax=None, units: str = "mm"):
     ax.set_ylabel(f"jaw 2 arclength ({units})")
     ax.set_aspect("equal")
     ax.set_title(f"quality of every jaw pair (each within ε = {plan.epsilon:.2g} J)")
-    return ax
+    return ax.figure
 
 
 def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
@@ -299,7 +300,7 @@ def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.set_title(f"top {len(shown)} jaw pairs" + ("" if getattr(plan, "allow_pulling", False)
                                                   else " (pulling pairs left out)"))
-    return ax
+    return ax.figure
 
 
 def save_plan_plots(plan, out_dir: str | Path, units: str = "mm") -> list[Path]:

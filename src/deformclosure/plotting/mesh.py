@@ -58,7 +58,8 @@ def plot_mesh(mesh, ax=None, units: str = "mm", values: np.ndarray | None = None
 
     Returns
     -------
-    Axes
+    matplotlib.figure.Figure
+        The figure holding ``ax`` (compose it with others, or save it).
     """
     import matplotlib.tri as mtri
 
@@ -86,7 +87,7 @@ def plot_mesh(mesh, ax=None, units: str = "mm", values: np.ndarray | None = None
     ax.set_aspect("equal")
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    return ax
+    return ax.figure
 
 
 def save_mesh_plot(mesh, path: str | Path, units: str = "mm") -> None:

@@ -38,7 +38,8 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
 
     Returns
     -------
-    Axes
+    matplotlib.figure.Figure
+        The figure holding ``ax`` (compose it with others, or save it).
     """
     if ax is None:
         _, ax = new_figure((7, 4.5))
@@ -60,7 +61,7 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
     ax.set_title(f"pads W = {result.pad.width * s:.3g}, ρ = {result.pad.radius * s:.3g} {units}: "
                  f"{result.verdict}")
     ax.legend(fontsize=8)
-    return ax
+    return ax.figure
 
 
 def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarray:
@@ -109,7 +110,8 @@ def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
 
     Returns
     -------
-    Axes
+    matplotlib.figure.Figure
+        The figure holding ``ax`` (compose it with others, or save it).
     """
     if ax is None:
         _, ax = new_figure((6, 6))
@@ -133,7 +135,7 @@ def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
     ax.set_ylabel(f"y ({units})")
     sig = "-" if result.sigma_star is None else f"{result.sigma_star * s:.4g} {units}"
     ax.set_title(f"{result.verdict}: σ* = {sig}, Q* = {result.quality * 1e3:.4g} mJ")
-    return ax
+    return ax.figure
 
 
 def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
@@ -158,7 +160,7 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
     ax.set_title("best grasp axes (pads at σ* for the exactly solved ones)")
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
-    return ax
+    return ax.figure
 
 
 def save_pad_plots(result, mesh, out_dir: str | Path, units: str = "mm") -> list[Path]:
@@ -167,7 +169,7 @@ def save_pad_plots(result, mesh, out_dir: str | Path, units: str = "mm") -> list
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, fn in (("quality.png", plot_pad_quality), ("grasp.png", None)):
-        ax = fn(result, units=units) if fn is not None else plot_pad_grasp(result, mesh, units=units)
-        save_figure(ax.figure, out / name)
+        fig = fn(result, units=units) if fn is not None else plot_pad_grasp(result, mesh, units=units)
+        save_figure(fig, out / name)
         paths.append(out / name)
     return paths
