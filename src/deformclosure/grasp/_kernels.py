@@ -125,6 +125,13 @@ def bottleneck_escape(indptr, indices, U, start):  # pragma: no cover - compiled
                 size = _heap_push(hk, hv, size, nd, w)
     if target < 0:
         return np.empty(0, np.int64)
+    return path_to(pred, target)
+
+
+@njit(cache=True, nogil=True)
+def path_to(pred, target):  # pragma: no cover - compiled
+    """The path start → ``target`` recorded by a search's predecessor array (-1 at the
+    start)."""
     n = 0
     x = target
     while x != -1:

@@ -64,7 +64,7 @@ from numba import njit
 from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
 from ..grasp import pieces as pc
-from ..grasp._kernels import _heap_pop, _heap_push
+from ..grasp._kernels import _heap_pop, _heap_push, path_to
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.release import release_energies
 from ..grasp.separation import lipschitz_constant, optimize_separation_arrays, vertex_energies
@@ -96,6 +96,18 @@ def _workers() -> int:
 def _e(x0v, kv, x):  # pragma: no cover - compiled
     d = x0v - x
     return 0.5 * kv * d * d if d > 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _strict_at(indptr, indices, x0, k, s, x):  # pragma: no cover - compiled
+    """Whether vertex ``s`` is below all its graph neighbours at σ = ``x`` (a strict local
+    minimum of the vertex energies, SPEC §4)."""
+    es = _e(x0[s], k[s], x)
+    for q in range(indptr[s], indptr[s + 1]):
+        w = indices[q]
+        if _e(x0[w], k[w], x) <= es:
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -134,14 +146,7 @@ def _k_strict_spans(indptr, indices, x0, k, verts, lo, hi, cr_ptr, cr_x, tols,
                 cur_open = False
             if cur - prev > tol:
                 m = 0.5 * (prev + cur)
-                es = _e(x0[s], k[s], m)
-                strict = True
-                for q in range(indptr[s], indptr[s + 1]):
-                    w = indices[q]
-                    if _e(x0[w], k[w], m) <= es:
-                        strict = False
-                        break
-                if strict:
+                if _strict_at(indptr, indices, x0, k, s, m):
                     out_i[n] = i
                     out_a[n] = prev
                     out_b[n] = cur
@@ -197,12 +202,7 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
     with ``epoch``.
     """
     us = _e(x0[s], k[s], x)
-    strict = True
-    for q in range(indptr[s], indptr[s + 1]):
-        w = indices[q]
-        if _e(x0[w], k[w], x) <= us:
-            strict = False
-            break
+    strict = _strict_at(indptr, indices, x0, k, s, x)
     first = np.inf
     size = 0
     best[s] = us
@@ -254,17 +254,7 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
                 best[w] = nd
                 pred[w] = v
                 size = _heap_push(hk, hv, size, nd, w)
-    n = 0
-    v = target
-    while v != -1:
-        n += 1
-        v = pred[v]
-    path = np.empty(n, np.int64)
-    v = target
-    for i in range(n - 1, -1, -1):
-        path[i] = v
-        v = pred[v]
-    return strict, first, level, path
+    return strict, first, level, path_to(pred, target)
 
 
 @njit(cache=True, nogil=True)
