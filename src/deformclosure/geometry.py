@@ -1,10 +1,43 @@
-"""Small geometric helpers shared by parts and meshes."""
+"""Geometric helpers shared by parts, meshes, fingers and jaws: the one home of the
+polygon area, the diameter and the SPEC's touching tolerance.
+
+SPEC §3: contacts count as touching within ``1e-9`` × the part's diameter. Every module
+takes that tolerance from :func:`touch_tolerance`, and the diameter from
+:func:`point_set_diameter` of the part's outer boundary, so all agree to the bit.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["point_set_diameter"]
+__all__ = ["point_set_diameter", "signed_area", "touch_tolerance", "TOUCH_TOLERANCE"]
+
+#: Contacts count as touching within this fraction of the part's diameter (SPEC §3).
+TOUCH_TOLERANCE = 1e-9
+
+
+def touch_tolerance(diameter: float) -> float:
+    """The SPEC §3 touching tolerance (m) of a part of ``diameter`` (m): ``1e-9 × diameter``.
+
+    Examples
+    --------
+    >>> touch_tolerance(0.03)
+    3e-11
+    """
+    return TOUCH_TOLERANCE * float(diameter)
+
+
+def signed_area(ring: np.ndarray) -> float:
+    """Signed area of a closed ring ``(n, 2)`` (shoelace formula; > 0 counter-clockwise).
+
+    Examples
+    --------
+    >>> signed_area(np.array([[0, 0], [2, 0], [2, 1], [0, 1]]))
+    2.0
+    """
+    r = np.asarray(ring, float)
+    x, y = r[:, 0], r[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 def point_set_diameter(points: np.ndarray) -> float:
