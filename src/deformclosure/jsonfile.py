@@ -10,15 +10,19 @@ readers' field checks name the field.)
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import re
 import stat
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Union
 
 from .errors import DeformClosureError
 
-__all__ = ["read_json", "read_text_file", "parse_json", "check_input_file", "MAX_INPUT_BYTES"]
+__all__ = ["read_json", "read_text_file", "parse_json", "check_input_file", "MAX_INPUT_BYTES",
+           "Source", "InputFile", "as_source"]
 
 #: Largest input file read (bytes): far above any part, mesh or job list we write.
 MAX_INPUT_BYTES = 256 * 2**20
@@ -43,14 +47,73 @@ def check_input_file(path: str | Path, error: type[DeformClosureError], what: st
                     f"(limit {MAX_INPUT_BYTES // 2**20} MiB)")
 
 
-def read_text_file(path: str | Path, error: type[DeformClosureError], what: str) -> str:
-    """The text of a regular input file: UTF-8 (BOM allowed) or UTF-16 with a BOM."""
-    path = Path(path)
-    check_input_file(path, error, what)
-    try:
-        raw = path.read_bytes()
-    except OSError as err:
-        raise error(f"{path}: cannot read the {what} ({err.strerror})") from None
+@dataclass(frozen=True)
+class Source:
+    """An input file read once: the name it is shown by and its bytes.
+
+    Every reader of the package accepts a :class:`Source` wherever it accepts a path, so
+    a batch worker parses exactly the bytes its job key was computed from, and a worker
+    on another machine needs no file system shared with the batch process.
+
+    Attributes
+    ----------
+    name : str
+        How the file is named in messages (the path the user gave); its suffix selects
+        the format.
+    data : bytes
+        The file's content.
+
+    Examples
+    --------
+    >>> src = Source("part.json", b'{"units": "mm"}')
+    >>> src.suffix, len(src.sha256)
+    ('.json', 64)
+    """
+
+    name: str
+    data: bytes
+
+    @property
+    def suffix(self) -> str:
+        """The name's last suffix in lower case (``".json"``)."""
+        return Path(self.name).suffix.lower()
+
+    @property
+    def sha256(self) -> str:
+        """Hex SHA-256 of the bytes."""
+        return hashlib.sha256(self.data).hexdigest()
+
+    def __str__(self) -> str:
+        return self.name
+
+    @classmethod
+    def read(cls, path: str | os.PathLike, error: type[DeformClosureError] = DeformClosureError,
+             what: str = "input file", name: str | None = None) -> "Source":
+        """Read a regular input file of bounded size (:func:`check_input_file`)."""
+        p = Path(path)
+        check_input_file(p, error, what)
+        try:
+            data = p.read_bytes()
+        except OSError as err:
+            raise error(f"{p}: cannot read the {what} ({err.strerror})") from None
+        return cls(str(p) if name is None else name, data)
+
+
+#: What the readers accept: a path or a :class:`Source`.
+InputFile = Union[str, os.PathLike, Source]
+
+
+def as_source(file: InputFile, error: type[DeformClosureError] = DeformClosureError,
+              what: str = "input file") -> Source:
+    """``file`` as a :class:`Source` (read from disk when it is a path)."""
+    return file if isinstance(file, Source) else Source.read(file, error, what)
+
+
+def read_text_file(path: InputFile, error: type[DeformClosureError], what: str) -> str:
+    """The text of a regular input file (or a :class:`Source`): UTF-8 (BOM allowed) or
+    UTF-16 with a BOM."""
+    src = as_source(path, error, what)
+    path, raw = src.name, src.data
     try:
         if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
             return raw.decode("utf-16")
@@ -103,12 +166,12 @@ def parse_json(text: str, source: str, error: type[DeformClosureError], what: st
         raise error(f"{source}: {err}") from None
 
 
-def read_json(path: str | Path, error: type[DeformClosureError], what: str) -> Any:
+def read_json(path: InputFile, error: type[DeformClosureError], what: str) -> Any:
     """Parse the JSON file ``path`` (see :func:`read_text_file` and :func:`parse_json`).
 
     Parameters
     ----------
-    path : str or Path
+    path : str, Path or Source
     error : DeformClosureError subclass
         Raised, with a one-line message naming the file, when the file cannot be read or
         is not valid JSON.
