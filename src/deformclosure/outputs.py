@@ -8,15 +8,18 @@ any moment either the previous file or the complete new one.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
+from typing import Any, Iterator
 
 from .errors import DeformClosureError
 
-__all__ = ["atomic_path", "write_text_atomic", "check_outputs"]
+__all__ = ["atomic_path", "write_text_atomic", "check_outputs", "json_safe", "json_text",
+           "write_json"]
 
 
 @contextmanager
@@ -59,6 +62,54 @@ def write_text_atomic(path: str | Path, text: str, what: str = "file") -> None:
             tmp.write_text(text, encoding="utf-8")
     except OSError as err:
         raise DeformClosureError(f"{path}: cannot write {what} ({err.strerror or err})") from None
+
+
+def json_safe(obj: Any) -> Any:
+    """``obj`` with numpy scalars and arrays made Python, tuples made lists, keys made
+    strings, and every non-finite float made ``None`` (SPEC §5: JSON has no infinity; a
+    report says ``"U_A_infinite": true`` beside the ``null``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> json_safe({"U_A": np.inf, "k": np.float32(2.5), "jaws": (np.int64(3), 4)})
+    {'U_A': None, 'k': 2.5, 'jaws': [3, 4]}
+    """
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_safe(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    return obj
+
+
+def json_text(obj: Any, indent: int | None = 2, compact: bool = False) -> str:
+    """The package's one JSON encoding: :func:`json_safe`, then strict JSON (no ``NaN`` or
+    ``Infinity`` can get through). ``compact``: no spaces and sorted keys (stored rows).
+
+    Examples
+    --------
+    >>> json_text({"b": 1.0, "a": float("nan")}, compact=True)
+    '{"a":null,"b":1.0}'
+    """
+    if compact:
+        return json.dumps(json_safe(obj), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return json.dumps(json_safe(obj), indent=indent, allow_nan=False)
+
+
+def write_json(path: str | Path, obj: Any, what: str = "report", indent: int | None = 2) -> None:
+    """Write ``obj`` as JSON (:func:`json_text`) to ``path`` atomically; one-line errors."""
+    write_text_atomic(path, json_text(obj, indent=indent) + "\n", what)
 
 
 def _same_file(a: Path, b: Path) -> bool:
