@@ -24,7 +24,7 @@ from .escape import FingerRelease, PlacementGrid, PlacementLandscape, release_en
 from .energy import (as_configurations, configuration_strains, corotational_energy, deformation_gradients,
                      element_energies, linear_energy, polar_rotation, strain_energy)
 from .equilibrium import EquilibriumResult, area_centroid, equilibrium
-from .fingers import (FINGER_TYPES, DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger,
+from .fingers import (FINGER_TYPES, DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger, as_fingers,
                       fingers_from_dict, fingers_to_dict, load_fingers, write_fingers)
 from .placement_energy import PlacementEnergy, PlacementState
 from .obstacles import TOUCH_TOLERANCE, boundary_gaps, dobstacle_mask, in_dfree, in_dobstacle, touch_tolerance
@@ -41,7 +41,7 @@ __all__ = [
     "in_dt", "topology_violations",
     # fingers
     "Finger", "PointFinger", "DiscFinger", "PolygonFinger", "HalfPlaneFinger", "FINGER_TYPES",
-    "load_fingers", "fingers_from_dict", "fingers_to_dict", "write_fingers",
+    "as_fingers", "load_fingers", "fingers_from_dict", "fingers_to_dict", "write_fingers",
     # obstacles
     "TOUCH_TOLERANCE", "touch_tolerance", "in_dobstacle", "dobstacle_mask", "in_dfree", "boundary_gaps",
     # slices

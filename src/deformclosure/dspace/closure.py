@@ -71,9 +71,9 @@ import numpy as np
 
 from ..errors import DeformClosureError
 from .equilibrium import EquilibriumResult, area_centroid, equilibrium
-from .fingers import DiscFinger, Finger, PolygonFinger
+from .fingers import Finger, as_fingers
 from .obstacles import (CORNER_NODE, FEATURE_NAMES, NODE_BODY, REFLEX, STRAIGHT, BoundaryModel,
-                        contact_rows, touch_tolerance)
+                        contact_rows, resolve_tolerance)
 
 __all__ = [
     "ContactPrimitive",
@@ -89,7 +89,10 @@ __all__ = [
 
 UNITS = {"length": "m", "energy": "J", "stiffness": "N/m", "strain_per_length": "1/m", "force": "N"}
 
-#: Separation (in units of the part's diameter) that counts as a strictly separating twist.
+#: Separation (in units of the part's diameter) that counts as a strictly separating twist:
+#: the optimum of the first-order LP, a round-off threshold of that LP; not the SPEC §3
+#: touching tolerance (:func:`deformclosure.geometry.touch_tolerance`), which decides
+#: which contacts are active.
 SEPARATION_TOL = 1e-9
 #: Maximum number of choices enumerated for "union" (convex-vertex) contacts.
 MAX_CHOICES = 4096
@@ -251,66 +254,95 @@ def contact_groups(mesh: Any, q: Any, fingers: Sequence[Finger], tol: float | No
         gives one per touching node) or none (not touching).
     """
     x = np.asarray(q, dtype=float).reshape(-1, 2)
-    tol = touch_tolerance(mesh) if tol is None else float(tol)
-    bd = BoundaryModel(mesh)
-    nodes = bd.nodes
-    P = x[nodes]
-    edges = bd.edges
-    a, b = x[edges[:, 0]], x[edges[:, 1]]
-    ab = b - a
-    ell = np.linalg.norm(ab, axis=1)
-    n_in = bd.inward_normals(x)
+    tol = resolve_tolerance(mesh, tol)
+    geo = _Boundary(BoundaryModel(mesh), x)
     out: list[ContactGroup] = []
     for fi, f in enumerate(fingers):
-        corners = f.vertices
-        at_corner = np.zeros(len(nodes), dtype=bool)
-        for k, fv in enumerate(corners):
-            dn = np.linalg.norm(P - fv, axis=1)
-            j = int(np.argmin(dn))
-            if dn[j] <= tol:
-                at_corner[j] = True
-                v = int(nodes[j])
-                e_prev, e_next = int(bd.edge_of[bd.prev[v]]), int(bd.edge_of[v])
-                feat = int(bd.feature[v])
-                if feat == STRAIGHT:
-                    out.append(_single(fi, x[v], bd.node_normals(x, np.array([v]))[0], 0.0, math.inf, "edge"))
-                elif feat == REFLEX:
-                    prims = tuple(
-                        ContactPrimitive(tuple(x[v]), tuple(n_in[e]), 0.0, math.inf) for e in (e_prev, e_next)
-                    )
-                    out.append(ContactGroup(fi, "all", prims, "concave_vertex"))
-                else:
-                    out.append(ContactGroup(fi, "any", _convex_axes(f, k, x, v, bd, n_in, e_prev, e_next),
-                                            "convex_vertex"))
-                continue
-            rel = fv - a
-            s = np.einsum("ej,ej->e", rel, ab) / ell**2
-            g = -np.einsum("ej,ej->e", rel, n_in)
-            ok = (s * ell > tol) & ((1 - s) * ell > tol) & (np.abs(g) <= tol)
-            if np.any(ok):
-                e = int(np.flatnonzero(ok)[np.argmin(np.abs(g[ok]))])
-                out.append(_single(fi, a[e] + s[e] * ab[e], n_in[e], 0.0, math.inf, "edge"))
+        at_corner = np.zeros(len(geo.nodes), dtype=bool)   # nodes touched by a finger corner
+        for k in range(len(f.vertices)):
+            out += _corner_groups(geo, fi, f, k, tol, at_corner)
         if f.has_interior:
-            sd = f.signed_distance(P)
-            touch = (np.abs(sd) <= tol) & ~at_corner
-            if len(corners):  # nodes at a polygon corner are corner contacts
-                dc = np.linalg.norm(P[:, None, :] - corners[None], axis=-1).min(axis=1)
-                touch &= dc > tol
-            rf = f.radius_of_curvature
-            for j in np.flatnonzero(touch):
-                v = int(nodes[j])
-                feat = int(bd.feature[v])
-                rp = math.inf if (feat == STRAIGHT and isinstance(f, DiscFinger)) else 0.0
-                out.append(_single(fi, x[v], f.outward_normal(x[v]), rf, rp, FEATURE_NAMES[feat]))
-            if isinstance(f, DiscFinger):
-                c = np.asarray(f.center)
-                rel = c - a
-                s = np.einsum("ej,ej->e", rel, ab) / ell**2
-                g = -np.einsum("ej,ej->e", rel, n_in) - f.radius
-                ok = (s * ell > tol) & ((1 - s) * ell > tol) & (np.abs(g) <= tol)
-                for e in np.flatnonzero(ok):
-                    out.append(_single(fi, a[e] + s[e] * ab[e], n_in[e], f.radius, math.inf, "edge"))
+            out += _body_groups(geo, fi, f, tol, at_corner)
+            if (rc := f.round_centre()) is not None:
+                out += _round_groups(geo, fi, *rc, tol)
     return tuple(out)
+
+
+class _Boundary:
+    """Boundary nodes and edges of configuration ``x`` (ends, vectors, lengths, inward
+    normals) with the rest-geometry features of :class:`.obstacles.BoundaryModel`."""
+
+    def __init__(self, bd: BoundaryModel, x: np.ndarray):
+        self.bd, self.x = bd, x
+        self.nodes = bd.nodes
+        self.P = x[self.nodes]
+        edges = bd.edges
+        self.a, self.b = x[edges[:, 0]], x[edges[:, 1]]
+        self.ab = self.b - self.a
+        self.ell = np.linalg.norm(self.ab, axis=1)
+        self.n_in = bd.inward_normals(x)
+
+    def edge_feet(self, p: np.ndarray, offset: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
+        """Foot parameter ``s`` of point ``p`` on every edge and the edges it touches:
+        foot inside the edge by more than ``tol`` and distance to the line minus
+        ``offset`` within ``tol``. Returns ``(s, g, touching)``."""
+        rel = p - self.a
+        s = np.einsum("ej,ej->e", rel, self.ab) / self.ell**2
+        g = -np.einsum("ej,ej->e", rel, self.n_in) - offset
+        ok = (s * self.ell > tol) & ((1 - s) * self.ell > tol) & (np.abs(g) <= tol)
+        return s, g, ok
+
+
+def _corner_groups(geo: _Boundary, fi: int, f: Finger, k: int, tol: float,
+                   at_corner: np.ndarray) -> list[ContactGroup]:
+    """Finger corner ``k`` at a boundary node (marked in ``at_corner``) or on an edge."""
+    bd, x = geo.bd, geo.x
+    fv = f.vertices[k]
+    dn = np.linalg.norm(geo.P - fv, axis=1)
+    j = int(np.argmin(dn))
+    if dn[j] <= tol:
+        at_corner[j] = True
+        v = int(geo.nodes[j])
+        e_prev, e_next = int(bd.edge_of[bd.prev[v]]), int(bd.edge_of[v])
+        feat = int(bd.feature[v])
+        if feat == STRAIGHT:
+            return [_single(fi, x[v], bd.node_normals(x, np.array([v]))[0], 0.0, math.inf, "edge")]
+        if feat == REFLEX:
+            prims = tuple(ContactPrimitive(tuple(x[v]), tuple(geo.n_in[e]), 0.0, math.inf) for e in (e_prev, e_next))
+            return [ContactGroup(fi, "all", prims, "concave_vertex")]
+        return [ContactGroup(fi, "any", _convex_axes(f, k, x, v, bd, geo.n_in, e_prev, e_next), "convex_vertex")]
+    s, g, ok = geo.edge_feet(fv, 0.0, tol)
+    if not np.any(ok):
+        return []
+    e = int(np.flatnonzero(ok)[np.argmin(np.abs(g[ok]))])
+    return [_single(fi, geo.a[e] + s[e] * geo.ab[e], geo.n_in[e], 0.0, math.inf, "edge")]
+
+
+def _body_groups(geo: _Boundary, fi: int, f: Finger, tol: float, at_corner: np.ndarray) -> list[ContactGroup]:
+    """Boundary nodes touching the finger body (not at one of its corners). A curved
+    body on a node of a straight edge is an edge contact; a flat face on any node has
+    the node as a vertex (part radius 0)."""
+    sd = f.signed_distance(geo.P)
+    touch = (np.abs(sd) <= tol) & ~at_corner
+    corners = f.vertices
+    if len(corners):  # nodes at a polygon corner are corner contacts
+        dc = np.linalg.norm(geo.P[:, None, :] - corners[None], axis=-1).min(axis=1)
+        touch &= dc > tol
+    rf = f.radius_of_curvature
+    out = []
+    for j in np.flatnonzero(touch):
+        v = int(geo.nodes[j])
+        feat = int(geo.bd.feature[v])
+        rp = math.inf if (feat == STRAIGHT and math.isfinite(rf)) else 0.0
+        out.append(_single(fi, geo.x[v], f.outward_normal(geo.x[v]), rf, rp, FEATURE_NAMES[feat]))
+    return out
+
+
+def _round_groups(geo: _Boundary, fi: int, c: np.ndarray, r: float, tol: float) -> list[ContactGroup]:
+    """A circular finger boundary (centre ``c``, radius ``r``) touching edges between
+    their nodes."""
+    s, _, ok = geo.edge_feet(c, r, tol)
+    return [_single(fi, geo.a[e] + s[e] * geo.ab[e], geo.n_in[e], r, math.inf, "edge") for e in np.flatnonzero(ok)]
 
 
 def _convex_axes(f: Finger, k: int, x: np.ndarray, v: int, bd: BoundaryModel, n_in: np.ndarray,
@@ -318,20 +350,15 @@ def _convex_axes(f: Finger, k: int, x: np.ndarray, v: int, bd: BoundaryModel, n_
     """Separating-axis candidates of a finger corner on a convex part vertex."""
     xv = x[v]
     prims: list[ContactPrimitive] = []
-    corners = f.vertices
-    wf = []
-    if isinstance(f, PolygonFinger):
-        wf = [corners[(k - 1) % len(corners)] - corners[k], corners[(k + 1) % len(corners)] - corners[k]]
+    wf = f.corner_edges(k)
     for e in (e_prev, e_next):
         # valid when the finger's wedge lies on the outer side of the edge's line
         if all(float(n_in[e] @ w) <= 1e-9 * np.linalg.norm(w) for w in wf):
             prims.append(ContactPrimitive(tuple(xv), tuple(n_in[e]), 0.0, math.inf))
-    if isinstance(f, PolygonFinger):
-        wp = [x[bd.prev[v]] - xv, x[bd.next[v]] - xv]
-        m = f.normals
-        for j in ((k - 1) % len(corners), k):  # the two finger edges at corner k
-            if all(float(m[j] @ w) >= -1e-9 * np.linalg.norm(w) for w in wp):
-                prims.append(ContactPrimitive(tuple(xv), tuple(m[j]), math.inf, 0.0))
+    wp = [x[bd.prev[v]] - xv, x[bd.next[v]] - xv]
+    for m in f.corner_normals(k):  # the finger's two faces at corner k
+        if all(float(m @ w) >= -1e-9 * np.linalg.norm(w) for w in wp):
+            prims.append(ContactPrimitive(tuple(xv), tuple(m), math.inf, 0.0))
     if not prims:  # overlapping wedges (should not happen when touching): block both edges
         prims = [ContactPrimitive(tuple(xv), tuple(n_in[e]), 0.0, math.inf) for e in (e_prev, e_next)]
     return tuple(prims)
@@ -499,41 +526,75 @@ def deform_closure(
     mesh : Mesh
         The part (rest configuration, m) with its material.
     fingers : sequence of Finger
-        Fixed fingers placed against the part at rest (touching or pre-squeezing).
-    stiffness : sparse matrix, optional
+        Fixed fingers placed against the part at rest (touching or pre-squeezing), m.
+    stiffness : sparse matrix (2n, 2n), optional
         ``K`` (N/m); assembled from the mesh when omitted.
     tol : float, optional
-        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter``.
+        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter`` (SPEC §3).
     equilibrium_result : EquilibriumResult, optional
-        Reuse an equilibrium computed before.
+        Reuse an equilibrium computed before (:func:`.equilibrium.equilibrium`).
 
     Returns
     -------
     ClosureResult
-        Verdict, deciding order, energy at equilibrium (J, linear), contacts with forces
-        (N) and features, escaping twist certificate.
+        Verdict and deciding order (1 or 2), energy at the equilibrium (J, linear),
+        contacts with forces (N) and features, escaping twist certificate
+        ``[vx, vy, omega]`` (m/s, m/s, rad/s) about the area centroid (m).
+
+    Raises
+    ------
+    FingerError, FingerPlacementError
+        ``fingers`` is not a sequence of fingers, or one starts deep inside the part.
+    DeformClosureError
+        The contact problem or a closure LP cannot be solved.
 
     Examples
     --------
-    >>> res = deform_closure(mesh, fingers)          # doctest: +SKIP
-    >>> res.to_dict()["deform_closure"], res.order   # doctest: +SKIP
-    (True, 1)
+    A 40 mm x 20 mm rubber plate between four point fingers, one at the middle of each
+    side: every twist keeps the gaps to first order (the contact normals meet at the
+    centre), and the second order decides that it is held.
+
+    >>> from deformclosure import Part, mesh_part
+    >>> from deformclosure.dspace import PointFinger, deform_closure
+    >>> part = Part.from_dict({"name": "plate", "units": "mm",
+    ...     "outer": [[0, 0], [40, 0], [40, 20], [0, 20]],
+    ...     "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "thickness": 2,
+    ...                  "elastic_limit_strain": 0.5},
+    ...     "mesh": {"max_area": 40, "points": [[20, 0], [40, 10], [20, 20], [0, 10]]}})
+    >>> fingers = [PointFinger((0.02, 0.0)), PointFinger((0.04, 0.01)),
+    ...            PointFinger((0.02, 0.02)), PointFinger((0.0, 0.01))]
+    >>> res = deform_closure(mesh_part(part), fingers)
+    >>> res.deform_closure, res.order, res.twist is None
+    (True, 2, True)
 
     References
     ----------
     Gopalakrishnan & Goldberg (2005), §3.3-3.4, Thm 1; Rimon & Burdick (1998).
     """
-    fingers = list(fingers)
-    tol = touch_tolerance(mesh) if tol is None else float(tol)
+    fingers = list(as_fingers(fingers))
+    tol = resolve_tolerance(mesh, tol)
     eq = equilibrium_result or equilibrium(mesh, fingers, stiffness=stiffness, tol=tol)
     x = eq.q
     L = float(mesh.diameter)
-    groups = contact_groups(mesh, x, fingers, tol=tol)
-    # a finger that pushes but whose contact is not resolved within tol (numerical
-    # round-off of the contact solve): use the solver's contact conditions instead
-    have = {g.finger for g in groups}
-    extra: list[ContactGroup] = []
     bd = BoundaryModel(mesh)
+    groups = contact_groups(mesh, x, fingers, tol=tol)
+    groups = tuple(groups) + _unresolved_groups(eq, groups, fingers, bd, L)
+    c = area_centroid(mesh.triangles, x)
+    rc = rigid_closure(groups, c, L)
+    contacts = _contact_reports(eq, groups, fingers, bd, L, tol)
+    return ClosureResult(
+        deform_closure=rc.closed, order=rc.order, energy=float(eq.energy), contacts=contacts,
+        twist=rc.twist, centroid=c, rotation_center=rc.rotation_center, groups=groups, equilibrium=eq,
+    )
+
+
+def _unresolved_groups(eq: EquilibriumResult, groups: Sequence[ContactGroup], fingers: Sequence[Finger],
+                       bd: BoundaryModel, L: float) -> tuple[ContactGroup, ...]:
+    """Groups of the fingers that push but whose contact is not resolved within ``tol``
+    (round-off of the contact solve): the solver's contact conditions instead."""
+    have = {g.finger for g in groups}
+    x = eq.q
+    extra: list[ContactGroup] = []
     for i in range(len(fingers)):
         if i not in have and np.linalg.norm(eq.forces[i]) > 0:
             sel = np.flatnonzero((eq.rows.finger == i) & (eq.multipliers > 0))
@@ -541,25 +602,30 @@ def deform_closure(
                 pt = (eq.rows.weights[r, :, None] * x[eq.rows.nodes[r]]).sum(axis=0)
                 extra.append(_single(i, pt, eq.rows.direction[r], fingers[i].radius_of_curvature, 0.0,
                                      _nearest_feature(bd, x, fingers[i], L)))
-    groups = tuple(groups) + tuple(extra)
-    c = area_centroid(mesh.triangles, x)
-    rc = rigid_closure(groups, c, L)
-    contacts = []
+    return tuple(extra)
+
+
+def _contact_reports(eq: EquilibriumResult, groups: Sequence[ContactGroup], fingers: Sequence[Finger],
+                     bd: BoundaryModel, L: float, tol: float) -> tuple[ContactReport, ...]:
+    """One report per finger: active (touching or pushing), force (N), part feature."""
+    out = []
     for i, f in enumerate(fingers):
         mine = [g for g in groups if g.finger == i]
         active = bool(mine) or bool(np.linalg.norm(eq.forces[i]) > 0)
-        feats = {g.feature for g in mine}
-        if "concave_vertex" in feats:
-            feature = "concave_vertex"
-        elif "edge" in feats:
-            feature = "edge"
-        elif mine:
-            pts = {tuple(np.round(np.array(p.point) / max(tol, 1e-300))) for g in mine for p in g.primitives}
-            feature = "edge" if len(pts) > 1 else "convex_vertex"
-        else:
-            feature = _nearest_feature(bd, x, f, L)
-        contacts.append(ContactReport(i, active, (float(eq.forces[i, 0]), float(eq.forces[i, 1])), feature))
-    return ClosureResult(
-        deform_closure=rc.closed, order=rc.order, energy=float(eq.energy), contacts=tuple(contacts),
-        twist=rc.twist, centroid=c, rotation_center=rc.rotation_center, groups=groups, equilibrium=eq,
-    )
+        feature = _reported_feature(mine, bd, eq.q, f, L, tol)
+        out.append(ContactReport(i, active, (float(eq.forces[i, 0]), float(eq.forces[i, 1])), feature))
+    return tuple(out)
+
+
+def _reported_feature(mine: list[ContactGroup], bd: BoundaryModel, x: np.ndarray, f: Finger, L: float,
+                      tol: float) -> str:
+    """The part feature reported for one finger from its contact groups ``mine``."""
+    feats = {g.feature for g in mine}
+    if "concave_vertex" in feats:
+        return "concave_vertex"
+    if "edge" in feats:
+        return "edge"
+    if mine:
+        pts = {tuple(np.round(np.array(p.point) / max(tol, 1e-300))) for g in mine for p in g.primitives}
+        return "edge" if len(pts) > 1 else "convex_vertex"
+    return _nearest_feature(bd, x, f, L)

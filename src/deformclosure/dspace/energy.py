@@ -69,7 +69,11 @@ def as_configurations(q: Any, n_nodes: int) -> tuple[np.ndarray, bool]:
     batched : bool
         Whether ``q`` was a batch (results are then returned per configuration).
     """
-    a = np.asarray(q, dtype=float)
+    try:
+        a = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        raise DeformClosureError(f"configuration: not an array of numbers ({type(q).__name__}); give "
+                                 f"node positions in m, shape ({n_nodes}, 2) or ({2 * n_nodes},)") from None
     n = n_nodes
     if a.shape == (n, 2):
         return a[None], False

@@ -61,9 +61,10 @@ import numpy as np
 
 from ..errors import DeformClosureError
 from ..elasticity.strain import strain_magnitude
-from .fingers import Finger
+from .fingers import Finger, as_fingers
 from .placement import check_finger_placement
-from .obstacles import BoundaryModel, ContactRows, contact_rows, merge_rows, refresh_rows, touch_tolerance
+from .obstacles import (BoundaryModel, ContactRows, contact_rows, merge_rows, nonnegative, refresh_rows,
+                        resolve_tolerance)
 
 __all__ = ["EquilibriumResult", "equilibrium", "area_centroid"]
 
@@ -365,31 +366,25 @@ class _RigidFit:
         return (self.x0 - self.C0 + Xd) @ _rot(c[2] / self.L).T + self.C0 + c[:2]
 
 
-def equilibrium(
-    mesh: Any,
-    fingers: Sequence[Finger],
-    *,
-    stiffness: Any = None,
-    tol: float | None = None,
-    max_iter: int = 50,
-    search_radius: float | None = None,
-    check_placement: bool = True,
-) -> EquilibriumResult:
+def equilibrium(mesh: Any, fingers: Sequence[Finger], *, stiffness: Any = None, tol: float | None = None,
+                max_iter: int = 50, search_radius: float | None = None,
+                check_placement: bool = True) -> EquilibriumResult:
     """Frictionless contact equilibrium of the free part between fixed fingers.
 
     Parameters
     ----------
     mesh : Mesh
-        The part's mesh (rest configuration, metres) with its material.
+        The part's mesh (rest configuration, m) with its material.
     fingers : sequence of Finger
-        Fixed fingers, placed against the part at rest (touching, or overlapping it to
-        pre-squeeze it).
+        Fixed fingers (m), placed against the part at rest (touching, or overlapping it
+        to pre-squeeze it).
     stiffness : sparse matrix (2n, 2n), optional
         Stiffness ``K`` (N/m); assembled from the mesh when omitted.
     tol : float, optional
-        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter``.
+        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter`` (SPEC §3).
     max_iter : int
-        Maximum number of re-linearisations.
+        Maximum number of updates of the rigid reference placement (each runs up to 8
+        re-linearisations; at most ``4 max_iter`` in all).
     search_radius : float, optional
         Contact conditions are linearised for gaps below this (m); default
         ``max(0.02 L, 3 x deepest penetration)`` with ``L`` the diameter.
@@ -400,7 +395,16 @@ def equilibrium(
     Returns
     -------
     EquilibriumResult
-        Configuration, contact force per finger (N), energy (J, linear), iterations.
+        Configuration (m), contact force per finger (N) and its moment (N m), energy
+        (J, linear), iterations, convergence.
+
+    Raises
+    ------
+    FingerError, FingerPlacementError
+        ``fingers`` is not a sequence of fingers, or one starts deep inside the part.
+    DeformClosureError
+        A bad ``tol``, ``max_iter`` or ``search_radius``, or the contact problem cannot
+        be solved.
 
     Notes
     -----
@@ -411,211 +415,288 @@ def equilibrium(
     own pre-squeeze, the part is pushed out by the smallest rigid motion and the
     equilibrium has zero energy. Check ``converged``.
 
+    Examples
+    --------
+    A 30 mm square of soft rubber squeezed 0.1 mm at each side between two flat jaws:
+
+    >>> import numpy as np
+    >>> from deformclosure import Part, mesh_part
+    >>> from deformclosure.dspace import HalfPlaneFinger, equilibrium
+    >>> rubber = {"youngs_modulus": 1e6, "poisson_ratio": 0.45, "elastic_limit_strain": 0.3}
+    >>> square = {"units": "mm", "outer": [[0, 0], [30, 0], [30, 30], [0, 30]], "material": rubber}
+    >>> jaws = [HalfPlaneFinger((0.0001, 0.0), (1.0, 0.0)), HalfPlaneFinger((0.0299, 0.0), (-1.0, 0.0))]
+    >>> res = equilibrium(mesh_part(Part.from_dict(square)), jaws)
+    >>> res.converged, bool(res.energy > 0), bool(np.allclose(res.forces.sum(axis=0), 0.0, atol=1e-9))
+    (True, True, True)
+
     References
     ----------
     Gopalakrishnan & Goldberg (2005), §3.3.
     """
-    fingers = list(fingers)
+    fingers = list(as_fingers(fingers))
+    _check_iteration(max_iter, search_radius)
     if check_placement:
         check_finger_placement(mesh, fingers)
-    x0 = np.asarray(mesh.nodes, dtype=float)
-    n = len(x0)
-    L = float(mesh.diameter)
-    tol = touch_tolerance(mesh) if tol is None else float(tol)
+    tol = resolve_tolerance(mesh, tol)
     if stiffness is None:
         from ..elasticity.stiffness import stiffness_matrix
 
         stiffness = stiffness_matrix(mesh)
-    K = stiffness
-    mat = getattr(mesh, "material", None)
-    if mat is not None:
-        F0 = float(mat.youngs_modulus * mat.thickness * L)
-    else:
-        F0 = float(np.abs(K.diagonal()).mean() * L)
-    bd = BoundaryModel(mesh)
-    C0 = area_centroid(mesh.triangles, x0)
+    solve = _ContactSolve(mesh, fingers, stiffness, search_radius)
+    X, lam, converged = solve.run(max_iter)
+    return solve.result(X, lam, converged, tol)
 
-    X = np.zeros((n, 2))
-    comp: _Compliance | None = None
-    fit = _RigidFit(x0, mesh.triangles, C0, L)
-    R0 = fit.R0  # rigid modes: translations (per m) and rotation (per L rad)
-    state: dict = {"comp": None, "rows": contact_rows(bd, x0, fingers, radius=0.0), "its": 0}
 
-    def _accuracy(X: np.ndarray) -> float:
+def _check_iteration(max_iter: Any, search_radius: Any) -> None:
+    """Refuse an iteration budget or a search radius out of range."""
+    if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise DeformClosureError(f"max_iter = {max_iter!r}: give an integer >= 1")
+    if search_radius is not None:
+        nonnegative(search_radius, "search_radius", "the contact search radius in m", "or None for the default")
+
+
+class _Anderson:
+    """Anderson acceleration (type II, depth 5) of the fixed-point map ``X -> X_new``
+    while the contact rows and the active set (the ``signature``) stay the same: the plain
+    iteration converges only linearly (the exact rigid rotation makes the gaps slightly
+    nonlinear), with a rate near 1 for parts that must turn to balance."""
+
+    def __init__(self) -> None:
+        self.X: list[np.ndarray] = []
+        self.F: list[np.ndarray] = []
+        self.signature: Any = None
+
+    def step(self, X: np.ndarray, X_new: np.ndarray, signature: Any) -> np.ndarray:
+        """The next iterate after ``X`` whose image is ``X_new``."""
+        if signature != self.signature:
+            self.X, self.F, self.signature = [], [], signature
+        self.X.append(X.ravel().copy())
+        self.F.append((X_new - X).ravel())
+        del self.X[:-6], self.F[:-6]
+        if len(self.F) < 2:
+            return X_new
+        dX = np.diff(np.array(self.X), axis=0).T
+        dF = np.diff(np.array(self.F), axis=0).T
+        gamma = np.linalg.lstsq(dF, self.F[-1], rcond=1e-10)[0]
+        return X_new - ((dX + dF) @ gamma).reshape(X_new.shape)
+
+
+class _ContactSolve:
+    """The sequential linearisation of the contact problem (module docstring, Method):
+    the part, the fingers, the rigid-motion fit and the contact rows linearised so far."""
+
+    def __init__(self, mesh: Any, fingers: list[Finger], K: Any, search_radius: float | None):
+        self.mesh, self.fingers, self.K = mesh, fingers, K
+        self.x0 = x0 = np.asarray(mesh.nodes, dtype=float)
+        self.n = len(x0)
+        self.L = L = float(mesh.diameter)
+        self.search_radius = search_radius
+        mat = getattr(mesh, "material", None)
+        if mat is not None:
+            self.F0 = float(mat.youngs_modulus * mat.thickness * L)   # force scale of the QP
+        else:
+            self.F0 = float(np.abs(K.diagonal()).mean() * L)
+        self.bd = BoundaryModel(mesh)
+        self.C0 = area_centroid(mesh.triangles, x0)
+        self.fit = _RigidFit(x0, mesh.triangles, self.C0, L)
+        self.R0 = self.fit.R0  # rigid modes: translations (per m) and rotation (per L rad)
+        self.comp: _Compliance | None = None
+        self.rows = contact_rows(self.bd, x0, fingers, radius=0.0)
+        self.its = 0
+
+    def accuracy(self, X: np.ndarray) -> float:
         """Convergence threshold (m): 1e-9 x diameter, or 1e-6 x the largest displacement
         (elastic part) when that is larger."""
-        Xd = X - (R0 @ fit.coords(X)).reshape(X.shape)
-        return max(1e-9 * L, 1e-6 * float(np.abs(Xd).max(initial=0.0)))
+        Xd = X - (self.R0 @ self.fit.coords(X)).reshape(X.shape)
+        return max(1e-9 * self.L, 1e-6 * float(np.abs(Xd).max(initial=0.0)))
 
-    def inner(X: np.ndarray, ref_rigid: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray, bool]:
+    def run(self, max_iter: int) -> tuple[np.ndarray, np.ndarray, bool]:
+        """Outer iteration. The finger normals at the nodes follow the part's rigid
+        placement r (the finger surface under a node moves when the part turns): r is a
+        fixed point, r = rigid part of the solution computed with reference r, found by
+        relaxed iteration with Aitken's adaptive relaxation factor (Irons-Tuck),
+        interleaved with the inner iterations. Returns ``(X, λ, converged)``."""
+        X = np.zeros((self.n, 2))
+        r = np.zeros(3)
+        omega = 0.5
+        F_prev = None
+        for _ in range(max_iter):
+            X, lam, ok = self.inner(X, r, 8)
+            F = self.fit.coords(X) - r
+            if ok and np.abs(F).max() <= self.accuracy(X):
+                return X, lam, True
+            if self.its >= 4 * max_iter:
+                break
+            if F_prev is not None:
+                dF = F - F_prev
+                den = float(dF @ dF)
+                if den > 0:
+                    omega = float(np.clip(-omega * float(F_prev @ dF) / den, 0.05, 1.5))
+            r = r + omega * F
+            F_prev = F
+        return X, lam, False
+
+    def inner(self, X: np.ndarray, ref_rigid: np.ndarray, budget: int) -> tuple[np.ndarray, np.ndarray, bool]:
         """Sequential linearised QPs with the reference placement fixed: material points
         and finger normals are taken on the rest geometry placed by ``ref_rigid``; part
         edge normals, moment arms and rigid modes are those of the rest geometry."""
-        xr = fit.placed(X, rigid=ref_rigid)
+        xr = self.fit.placed(X, rigid=ref_rigid)
         lam = np.zeros(0)
-        # Anderson acceleration (type II, depth 5) of the fixed-point map X -> X_new while
-        # the contact rows and the active set stay the same: the plain iteration converges
-        # only linearly (the exact rigid rotation makes the gaps slightly nonlinear), with
-        # a rate near 1 for parts that must turn to balance.
-        hist_X: list[np.ndarray] = []
-        hist_F: list[np.ndarray] = []
-        signature = None
-        for k in range(budget):
-            state["its"] += 1
-            x = fit.placed(X)
-            if search_radius is None:
-                probe = contact_rows(bd, x, fingers, radius=0.02 * L, x_ref=xr, normals_ref=x0, feet_ref=x0)
-                pen = max(0.0, -float(probe.gap.min(initial=0.0)))
-                radius = max(0.02 * L, 3.0 * pen)
-                new = probe if radius == 0.02 * L else contact_rows(bd, x, fingers, radius=radius, x_ref=xr,
-                                                                    normals_ref=x0, feet_ref=x0)
-            else:
-                new = contact_rows(bd, x, fingers, radius=float(search_radius), x_ref=xr, normals_ref=x0,
-                                   feet_ref=x0)
-            # rows once linearised stay (re-measured), also across updates of the
-            # reference placement: the set does not flip-flop, and a turning part does
-            # not lose its contacts for a step (and jump) when the reference moves
-            rows = merge_rows(new, refresh_rows(state["rows"], bd, x, fingers))
-            state["rows"] = rows
-            r = len(rows)
-            if r == 0:
+        anderson = _Anderson()
+        for _ in range(budget):
+            self.its += 1
+            x = self.fit.placed(X)
+            rows = self.linearise(x, xr)
+            if len(rows) == 0:
                 return X, np.zeros(0), True
-            if state["comp"] is None:
-                state["comp"] = _Compliance(K, mesh)
-            comp = state["comp"]
-            S = np.unique(rows.nodes)
-            col = {int(v): i for i, v in enumerate(S)}
-            loc = np.vectorize(col.__getitem__, otypes=[np.int64])(rows.nodes)  # (r, 2)
-            C = np.zeros((r, 2 * len(S)))  # gradient of each gap w.r.t. the DOFs of S
-            ridx = np.arange(r)
-            for jj in range(2):
-                np.add.at(C, (ridx, 2 * loc[:, jj]), rows.weights[:, jj] * rows.direction[:, 0])
-                np.add.at(C, (ridx, 2 * loc[:, jj] + 1), rows.weights[:, jj] * rows.direction[:, 1])
-            W = C @ comp.block(S) @ C.T  # contact compliance (m/N)
-            gt = rows.gap - C @ X[S].ravel()  # linearised gaps at X = 0
-            # force and moment balance on the rest geometry (rows of B), moment scaled by L
-            p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
-            arm = p0 - C0
-            d = rows.direction
-            Bfull = np.vstack([d[:, 0], d[:, 1], (arm[:, 0] * d[:, 1] - arm[:, 1] * d[:, 0]) / L])
-            U_, s_, _ = np.linalg.svd(Bfull, full_matrices=False)
-            keep = s_ > 1e-10 * max(s_.max(initial=0.0), 1e-300)
-            Ur = U_[:, keep]
-            B = Ur.T @ Bfull
-            Ws, gs = W * F0 / L, gt / L
-            lam_s, y = _solve_dual(Ws, gs, B)
-            lam_s, y, N, act = _polish(Ws, gs, B, lam_s, y)
-            lam = lam_s * F0
-            f = np.zeros(2 * n)
-            np.add.at(f, np.ravel(np.c_[2 * S, 2 * S + 1]), C.T @ lam)
-            X_el = comp.solve(f).reshape(n, 2)
-            # rigid motion: y fixes it on the span of the active rows; on the free
-            # directions take the smallest total rigid motion that keeps every gap >= 0
-            c_rig = fit.coords(X_el) / L  # (tx, ty, L theta) / L
-            cs = Ur.T @ c_rig
-            ina = np.flatnonzero(~act)
-            Mi = B[:, ina].T
-            zi = (Ws @ lam_s + gs)[ina]
-            if len(B):
-                y = _min_norm_rigid(y + cs, N, Mi, zi - Mi @ cs) - cs
-            alpha = (Ur @ y - (c_rig - Ur @ cs)) * L  # (tx, ty, L theta) in m
-            X_new = X_el + (R0 @ alpha).reshape(n, 2)
-            # trust region on the rigid motion: at most 5 % of the diameter (or 0.05 rad)
-            # per linearisation, so a part squeezed out moves out gradually
-            dc = fit.coords(X_new) - fit.coords(X)
-            big = float(np.abs(dc).max())
-            if big > 0.05 * L:
-                X_new = X_new - (R0 @ (dc * (1.0 - 0.05 * L / big))).reshape(n, 2)
-            step = float(np.abs(fit.placed(X_new) - x).max())
-            if step <= _accuracy(X_new):
+            X_new, lam, act = self.solve_qp(rows, X)
+            X_new = self.limit_rigid_step(X_new, X)
+            step = float(np.abs(self.fit.placed(X_new) - x).max())
+            if step <= self.accuracy(X_new):
                 return X_new, lam, True
-            sig_now = (r, act.tobytes())
-            if sig_now != signature:
-                hist_X, hist_F, signature = [], [], sig_now
-            hist_X.append(X.ravel().copy())
-            hist_F.append((X_new - X).ravel())
-            del hist_X[:-6], hist_F[:-6]
-            X = X_new
-            if len(hist_F) >= 2:
-                dX = np.diff(np.array(hist_X), axis=0).T
-                dF = np.diff(np.array(hist_F), axis=0).T
-                gamma = np.linalg.lstsq(dF, hist_F[-1], rcond=1e-10)[0]
-                X = X_new - ((dX + dF) @ gamma).reshape(X_new.shape)
+            X = anderson.step(X, X_new, (len(rows), act.tobytes()))
         return X, lam, False
 
-    # The finger normals at the nodes follow the part's rigid placement r (the finger
-    # surface under a node moves when the part turns): r is a fixed point, r = rigid part
-    # of the solution computed with reference r, found by relaxed iteration with Aitken's
-    # adaptive relaxation factor (Irons-Tuck), interleaved with the inner iterations.
-    X = np.zeros((n, 2))
-    r = np.zeros(3)
-    omega = 0.5
-    F_prev = None
-    converged = False
-    for _ in range(max_iter):
-        X, lam, ok = inner(X, r, 8)
-        F = fit.coords(X) - r
-        if ok and np.abs(F).max() <= _accuracy(X):
-            converged = True
-            break
-        if state["its"] >= 4 * max_iter:
-            break
-        if F_prev is not None:
-            dF = F - F_prev
-            den = float(dF @ dF)
-            if den > 0:
-                omega = float(np.clip(-omega * float(F_prev @ dF) / den, 0.05, 1.5))
-        r = r + omega * F
-        F_prev = F
-    it = state["its"]
-    rows = state["rows"]
-    x = fit.placed(X)
+    def linearise(self, x: np.ndarray, xr: np.ndarray) -> ContactRows:
+        """The contact rows in configuration ``x`` (directions on the reference ``xr``).
+        Rows once linearised stay (re-measured), also across updates of the reference
+        placement: the set does not flip-flop, and a turning part does not lose its
+        contacts for a step (and jump) when the reference moves."""
+        bd, fingers, x0, L = self.bd, self.fingers, self.x0, self.L
+        if self.search_radius is None:
+            probe = contact_rows(bd, x, fingers, radius=0.02 * L, x_ref=xr, normals_ref=x0, feet_ref=x0)
+            pen = max(0.0, -float(probe.gap.min(initial=0.0)))
+            radius = max(0.02 * L, 3.0 * pen)
+            new = probe if radius == 0.02 * L else contact_rows(bd, x, fingers, radius=radius, x_ref=xr,
+                                                                normals_ref=x0, feet_ref=x0)
+        else:
+            new = contact_rows(bd, x, fingers, radius=float(self.search_radius), x_ref=xr, normals_ref=x0,
+                               feet_ref=x0)
+        self.rows = merge_rows(new, refresh_rows(self.rows, bd, x, fingers))
+        return self.rows
 
-    # final quantities
-    nf = len(fingers)
+    def solve_qp(self, rows: ContactRows, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The linearised QP in its dual (scaled by ``F0`` and ``L``), polished: the new
+        displacement, the contact forces (N) and the active rows."""
+        if self.comp is None:
+            self.comp = _Compliance(self.K, self.mesh)
+        L, F0 = self.L, self.F0
+        S, C = _gap_gradients(rows)
+        W = C @ self.comp.block(S) @ C.T  # contact compliance (m/N)
+        gt = rows.gap - C @ X[S].ravel()  # linearised gaps at X = 0
+        Ur, B = _balance_rows(rows, self.x0, self.C0, L)
+        Ws, gs = W * F0 / L, gt / L
+        lam_s, y = _solve_dual(Ws, gs, B)
+        lam_s, y, N, act = _polish(Ws, gs, B, lam_s, y)
+        lam = lam_s * F0
+        f = np.zeros(2 * self.n)
+        np.add.at(f, np.ravel(np.c_[2 * S, 2 * S + 1]), C.T @ lam)
+        X_el = self.comp.solve(f).reshape(self.n, 2)
+        # rigid motion: y fixes it on the span of the active rows; on the free
+        # directions take the smallest total rigid motion that keeps every gap >= 0
+        c_rig = self.fit.coords(X_el) / L  # (tx, ty, L theta) / L
+        cs = Ur.T @ c_rig
+        ina = np.flatnonzero(~act)
+        Mi = B[:, ina].T
+        zi = (Ws @ lam_s + gs)[ina]
+        if len(B):
+            y = _min_norm_rigid(y + cs, N, Mi, zi - Mi @ cs) - cs
+        alpha = (Ur @ y - (c_rig - Ur @ cs)) * L  # (tx, ty, L theta) in m
+        return X_el + (self.R0 @ alpha).reshape(self.n, 2), lam, act
+
+    def limit_rigid_step(self, X_new: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Trust region on the rigid motion: at most 5 % of the diameter (or 0.05 rad) per
+        linearisation, so a part squeezed out moves out gradually."""
+        dc = self.fit.coords(X_new) - self.fit.coords(X)
+        big = float(np.abs(dc).max())
+        if big > 0.05 * self.L:
+            X_new = X_new - (self.R0 @ (dc * (1.0 - 0.05 * self.L / big))).reshape(self.n, 2)
+        return X_new
+
+    def result(self, X: np.ndarray, lam: np.ndarray, converged: bool, tol: float) -> EquilibriumResult:
+        """Forces, moments, points, gaps and energy of the solution ``X``."""
+        fit, rows, L, x0 = self.fit, self.rows, self.L, self.x0
+        x = fit.placed(X)
+        nf = len(self.fingers)
+        # gaps in the contact model of the solve (node-to-surface: part nodes against the
+        # finger bodies, finger corners against part edges, material points fixed at rest)
+        final_rows = merge_rows(contact_rows(self.bd, x, self.fingers, radius=max(0.02 * L, 10 * tol),
+                                             x_ref=fit.placed(X, rigid=fit.coords(X)), normals_ref=x0,
+                                             feet_ref=x0),
+                                refresh_rows(rows, self.bd, x, self.fingers))
+        gaps = np.full(nf, np.inf)
+        np.minimum.at(gaps, final_rows.finger, final_rows.gap)
+        forces, moments, nodal, points = _finger_forces(rows, lam, x, x0, self.C0, nf)
+        for i in range(nf):
+            if np.isnan(points[i, 0]):
+                sel = np.flatnonzero(final_rows.finger == i)
+                if len(sel):
+                    points[i] = final_rows.point[sel[np.argmin(final_rows.gap[sel])]]
+        active = (gaps <= tol) | (np.linalg.norm(forces, axis=1) > 0)
+        Xf = X.ravel()
+        energy = max(0.0, 0.5 * float(Xf @ (self.K @ Xf)))
+        if np.isfinite(gaps).any() and gaps[np.isfinite(gaps)].min() < -max(tol, self.accuracy(X)):
+            converged = False
+        rig = fit.coords(X)  # (tx, ty, L theta): mean rigid motion
+        return EquilibriumResult(
+            q=x, displacement=X, rotation=float(rig[2] / L), translation=rig[:2].copy(), forces=forces,
+            moments=moments, points=points, nodal_forces=nodal, gaps=gaps, active=active, energy=energy,
+            centroid=area_centroid(self.mesh.triangles, x), iterations=self.its, converged=converged, tol=tol,
+            accuracy=self.accuracy(X), max_strain=float(strain_magnitude(self.mesh, Xf).max(initial=0.0)),
+            rows=rows, multipliers=lam,
+        )
+
+
+def _gap_gradients(rows: ContactRows) -> tuple[np.ndarray, np.ndarray]:
+    """The perimeter nodes ``S`` the rows involve and the gradient ``C (r, 2|S|)`` of
+    every gap with respect to their DOFs."""
+    r = len(rows)
+    S = np.unique(rows.nodes)
+    col = {int(v): i for i, v in enumerate(S)}
+    loc = np.vectorize(col.__getitem__, otypes=[np.int64])(rows.nodes)  # (r, 2)
+    C = np.zeros((r, 2 * len(S)))
+    ridx = np.arange(r)
+    for jj in range(2):
+        np.add.at(C, (ridx, 2 * loc[:, jj]), rows.weights[:, jj] * rows.direction[:, 0])
+        np.add.at(C, (ridx, 2 * loc[:, jj] + 1), rows.weights[:, jj] * rows.direction[:, 1])
+    return S, C
+
+
+def _balance_rows(rows: ContactRows, x0: np.ndarray, C0: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """Force and moment balance of the row forces on the rest geometry (moment scaled by
+    ``L``), reduced to independent rows: ``(Ur, B = Ur^T B_full)``."""
+    p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
+    arm = p0 - C0
+    d = rows.direction
+    Bfull = np.vstack([d[:, 0], d[:, 1], (arm[:, 0] * d[:, 1] - arm[:, 1] * d[:, 0]) / L])
+    U_, s_, _ = np.linalg.svd(Bfull, full_matrices=False)
+    keep = s_ > 1e-10 * max(s_.max(initial=0.0), 1e-300)
+    Ur = U_[:, keep]
+    return Ur, Ur.T @ Bfull
+
+
+def _finger_forces(rows: ContactRows, lam: np.ndarray, x: np.ndarray, x0: np.ndarray, C0: np.ndarray,
+                   nf: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Force (N) and moment about ``C0`` (N m, rest arms) of every finger, the nodal
+    forces, and the centre of each finger's contact forces in ``x`` (NaN without force)."""
     forces = np.zeros((nf, 2))
     moments = np.zeros(nf)
-    nodal = np.zeros((n, 2))
+    nodal = np.zeros((len(x), 2))
     points = np.full((nf, 2), np.nan)
-    # gaps in the contact model of the solve (node-to-surface: part nodes against the
-    # finger bodies, finger corners against part edges, material points fixed at rest)
-    final_rows = merge_rows(contact_rows(bd, x, fingers, radius=max(0.02 * L, 10 * tol),
-                                         x_ref=fit.placed(X, rigid=fit.coords(X)), normals_ref=x0,
-                                         feet_ref=x0),
-                            refresh_rows(rows, bd, x, fingers))
-    gaps = np.full(nf, np.inf)
-    np.minimum.at(gaps, final_rows.finger, final_rows.gap)
-    if len(lam):
-        fr = lam[:, None] * rows.direction
-        np.add.at(forces, rows.finger, fr)
-        for j in range(2):
-            np.add.at(nodal, rows.nodes[:, j], rows.weights[:, j, None] * fr)
-        p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
-        arm = p0 - C0
-        np.add.at(moments, rows.finger, arm[:, 0] * fr[:, 1] - arm[:, 1] * fr[:, 0])
-        pts = (rows.weights[:, :, None] * x[rows.nodes]).sum(axis=1)
-        wsum = np.zeros(nf)
-        np.add.at(wsum, rows.finger, lam)
-        psum = np.zeros((nf, 2))
-        np.add.at(psum, rows.finger, lam[:, None] * pts)
-        has = wsum > 0
-        points[has] = psum[has] / wsum[has, None]
-    for i in range(nf):
-        if np.isnan(points[i, 0]):
-            sel = np.flatnonzero(final_rows.finger == i)
-            if len(sel):
-                points[i] = final_rows.point[sel[np.argmin(final_rows.gap[sel])]]
-    pushing = np.linalg.norm(forces, axis=1) > 0
-    active = (gaps <= tol) | pushing
-    Xf = X.ravel()
-    energy = max(0.0, 0.5 * float(Xf @ (K @ Xf)))
-    if np.isfinite(gaps).any() and gaps[np.isfinite(gaps)].min() < -max(tol, _accuracy(X)):
-        converged = False
-    rig = fit.coords(X)  # (tx, ty, L theta): mean rigid motion
-    return EquilibriumResult(
-        q=x, displacement=X, rotation=float(rig[2] / L), translation=rig[:2].copy(), forces=forces,
-        moments=moments, points=points, nodal_forces=nodal, gaps=gaps, active=active, energy=energy,
-        centroid=area_centroid(mesh.triangles, x), iterations=it, converged=converged, tol=tol,
-        accuracy=_accuracy(X), max_strain=float(strain_magnitude(mesh, Xf).max(initial=0.0)), rows=rows,
-        multipliers=lam,
-    )
+    if not len(lam):
+        return forces, moments, nodal, points
+    fr = lam[:, None] * rows.direction
+    np.add.at(forces, rows.finger, fr)
+    for j in range(2):
+        np.add.at(nodal, rows.nodes[:, j], rows.weights[:, j, None] * fr)
+    p0 = (rows.weights[:, :, None] * x0[rows.nodes]).sum(axis=1)
+    arm = p0 - C0
+    np.add.at(moments, rows.finger, arm[:, 0] * fr[:, 1] - arm[:, 1] * fr[:, 0])
+    pts = (rows.weights[:, :, None] * x[rows.nodes]).sum(axis=1)
+    wsum = np.zeros(nf)
+    np.add.at(wsum, rows.finger, lam)
+    psum = np.zeros((nf, 2))
+    np.add.at(psum, rows.finger, lam[:, None] * pts)
+    has = wsum > 0
+    points[has] = psum[has] / wsum[has, None]
+    return forces, moments, nodal, points

@@ -64,7 +64,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .fingers import DiscFinger, Finger, HalfPlaneFinger, PointFinger
+from ..errors import DeformClosureError
+from .fingers import Finger, as_fingers
 from .placement_energy import PlacementEnergy, PlacementState
 
 __all__ = ["PlacementGrid", "PlacementLandscape", "FingerRelease", "release_energy_fingers",
@@ -191,10 +192,7 @@ class PlacementLandscape:
         self._esc: dict[Key, bool] = {}
         self._eq: dict[tuple, bool] = {}
         # the fingers' hub: on zero-energy plateaus the search prefers moving away from it
-        pts = [np.asarray([f.center]) if isinstance(f, DiscFinger)
-               else np.asarray([f.point]) if isinstance(f, HalfPlaneFinger)
-               else np.asarray(f.vertices, float).reshape(-1, 2) for f in energy.fingers]
-        self._hub = np.concatenate(pts).mean(axis=0)
+        self._hub = np.concatenate([f.reference_points() for f in energy.fingers]).mean(axis=0)
         self.twin: PlacementEnergy | None = None
         self._twin_E: dict[Key, float] = {}
 
@@ -355,7 +353,8 @@ class PlacementLandscape:
         return 2.0 * float(np.quantile(np.abs(E1[ok] - E2[ok]) / top[ok], 0.9))
 
 
-#: Relative differences below this are round-off, whatever the noise floor.
+#: Relative energy differences below this are round-off, whatever the noise floor (a
+#: relative threshold on energies, not the SPEC §3 touching tolerance of lengths).
 ROUND_OFF = 1e-9
 
 
@@ -455,6 +454,14 @@ class FingerRelease:
         part frame.
     warnings : tuple of str
         E.g. point fingers pressing the part (their energies follow the mesh).
+
+    Examples
+    --------
+    Made by :func:`release_energy_fingers` (skipped: see there why):
+
+    >>> rel = release_energy_fingers(mesh, fingers)                  # doctest: +SKIP
+    >>> rel.U_A > rel.U_A_error, rel.target, rel.to_dict()["U_A"]     # doctest: +SKIP
+    (True, 'released', 0.0037...)
     """
 
     U_A: float
@@ -568,39 +575,41 @@ def lattice_angle(mesh: Any) -> float:
 
 
 def _grid(pe: PlacementEnergy, g0: np.ndarray, n_translation: int, levels: int) -> PlacementGrid:
+    """The lattice about ``g0`` (module docstring, step 2)."""
     D = pe.diameter
-    radii = [f.radius for f in pe.fingers if isinstance(f, DiscFinger)]
+    rounds = [f.round_centre() for f in pe.fingers]
+    radii = [rc[1] for rc in rounds if rc is not None]
     h = D / n_translation
     if radii:
         h = min(h, 0.5 * min(radii))
     R = pe.radius
     n_phi = int(math.ceil(2 * math.pi * R / h))
     scale = 2 ** int(levels)
-    c = pe.centroid + g0[:2]
     alpha = lattice_angle(pe.mesh)
-    A = np.array([[math.cos(alpha), math.sin(alpha)], [-math.sin(alpha), math.cos(alpha)]])
-    bounded = [f for f in pe.fingers if not isinstance(f, HalfPlaneFinger)]
-    if bounded:
-        P = []
-        for f in bounded:
-            if isinstance(f, DiscFinger):
-                P += [np.asarray(f.center) - f.radius, np.asarray(f.center) + f.radius]
-            else:
-                P += list(np.asarray(f.vertices, float).reshape(-1, 2))
-        P = (np.asarray(P) - c) @ A.T                # lattice coordinates
-        if any(isinstance(f, DiscFinger) for f in bounded):   # disc corners in this frame
-            P = np.vstack([P] + [((np.asarray(f.center) - c) @ A.T) + f.radius * np.array(sg)
-                                 for f in bounded if isinstance(f, DiscFinger)
-                                 for sg in ((1, 1), (1, -1), (-1, 1), (-1, -1))])
-        lo = P.min(axis=0) - R - 2 * h
-        hi = P.max(axis=0) + R + 2 * h
-        lo = np.minimum(lo, -2 * h)
-        hi = np.maximum(hi, 2 * h)
-    else:
-        lo, hi = np.full(2, -2.0 * D), np.full(2, 2.0 * D)
+    lo, hi = _translation_bounds(pe, g0, h, alpha)
     ilo = tuple(int(math.floor(v / h)) * scale for v in lo)
     ihi = tuple(int(math.ceil(v / h)) * scale for v in hi)
     return PlacementGrid(np.asarray(g0, float), float(h), n_phi, scale, ilo, ihi, float(alpha))
+
+
+def _translation_bounds(pe: PlacementEnergy, g0: np.ndarray, h: float, alpha: float) -> tuple[np.ndarray, np.ndarray]:
+    """Translation bounds (m, lattice frame at angle ``alpha``) about ``g0``: the bounded
+    fingers' bounding box grown by the part's radius and two steps (at least ±2 steps);
+    ±2 diameters when every finger is a half-plane."""
+    R, D = pe.radius, pe.diameter
+    c = pe.centroid + g0[:2]
+    A = np.array([[math.cos(alpha), math.sin(alpha)], [-math.sin(alpha), math.cos(alpha)]])
+    extents = [e for e in (f.extent_points() for f in pe.fingers) if e is not None]
+    if not extents:
+        return np.full(2, -2.0 * D), np.full(2, 2.0 * D)
+    P = (np.concatenate(extents) - c) @ A.T                # lattice coordinates
+    rounds = [rc for rc in (f.round_centre() for f in pe.fingers) if rc is not None]
+    if rounds:                                             # disc corners in this frame
+        P = np.vstack([P] + [((np.asarray(cc) - c) @ A.T) + r * np.array(sg)
+                             for cc, r in rounds for sg in ((1, 1), (1, -1), (-1, 1), (-1, -1))])
+    lo = P.min(axis=0) - R - 2 * h
+    hi = P.max(axis=0) + R + 2 * h
+    return np.minimum(lo, -2 * h), np.maximum(hi, 2 * h)
 
 
 def equilibrium_placement(energy: PlacementEnergy, start: Any, h: float, h_phi: float) -> np.ndarray:
@@ -644,23 +653,11 @@ def _strain(pe: PlacementEnergy, state: PlacementState, operator) -> float:
     return float(np.abs(principal_strains(e)).max())
 
 
-def release_energy_fingers(
-    mesh: Any,
-    fingers: Sequence[Finger],
-    *,
-    part: Any = None,
-    solver: Any = None,
-    start: Any = None,
-    rigid_closed: bool | None = None,
-    n_translation: int = 48,
-    levels: int = 2,
-    noise: bool = True,
-    twin: Any = None,
-    stop_above: float | None = None,
-    max_evaluations: int = 200_000,
-    progress: Callable[[str], None] | None = None,
-    count: Callable[[int], None] | None = None,
-) -> FingerRelease:
+def release_energy_fingers(mesh: Any, fingers: Sequence[Finger], *, part: Any = None, solver: Any = None,
+                           start: Any = None, rigid_closed: bool | None = None, n_translation: int = 48,
+                           levels: int = 2, noise: bool = True, twin: Any = None, stop_above: float | None = None,
+                           max_evaluations: int = 200_000, progress: Callable[[str], None] | None = None,
+                           count: Callable[[int], None] | None = None) -> FingerRelease:
     """Release energy ``U_A`` of a part held by fixed fingers, with its escape path.
 
     Parameters
@@ -678,12 +675,10 @@ def release_energy_fingers(
         :func:`~deformclosure.dspace.equilibrium.equilibrium` (its rigid motion); default
         the rest placement ``(0, 0, 0)``.
     rigid_closed : bool, optional
-        Verdict of the rigid test (:func:`~deformclosure.dspace.closure.deform_closure`)
-        at the equilibrium, used when the part is at rest (``E* = 0``, Thm 1); computed
-        when needed and not given.
+        Verdict of the rigid test (:func:`~deformclosure.dspace.closure.deform_closure`),
+        used at rest (``E* = 0``, Thm 1); computed when needed and not given.
     n_translation : int
-        Coarse translation step ``D / n_translation`` (and at most half the smallest disc
-        radius).
+        Coarse translation step ``D / n_translation`` (at most half the smallest disc radius).
     levels : int
         Halvings of the lattice near the saddle.
     noise : bool
@@ -703,47 +698,139 @@ def release_energy_fingers(
     Returns
     -------
     FingerRelease
+        ``U_A`` (J) with its error, the verdict, the escape path (m, m, rad) and its
+        energies (J), the elastic limit ``U_L`` (J) and the quality (J).
+
+    Raises
+    ------
+    FingerError
+        ``fingers`` is not a sequence of fingers.
+    DeformClosureError
+        A bad ``start``, lattice parameter or budget, or a finger reaching deeper into the
+        part at the start than the model allows.
 
     Examples
     --------
-    >>> rel = release_energy_fingers(mesh, fingers)     # doctest: +SKIP
-    >>> rel.U_A, rel.deform_closure, rel.path.shape     # doctest: +SKIP
-    """
-    from ..log import logger
+    A 40 mm x 20 mm plate pinched by two discs at the middle of its long sides and
+    stopped at its ends by two point fingers. Skipped as a doctest: the first call
+    compiles the contact kernels (one to two minutes), and the search solves thousands
+    of contact problems.
 
-    t0 = time.perf_counter()
+    >>> from deformclosure import Part, mesh_part
+    >>> from deformclosure.dspace import DiscFinger, PointFinger, release_energy_fingers
+    >>> plate = Part.from_dict({"units": "mm", "outer": [[0, 0], [40, 0], [40, 20], [0, 20]], "mesh": {
+    ...     "max_area": 20}, "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "elastic_limit_strain": 0.5}})
+    >>> fingers = [DiscFinger((0.02, -0.0049), 0.005), DiscFinger((0.02, 0.0249), 0.005),
+    ...            PointFinger((0.0, 0.01)), PointFinger((0.04, 0.01))]
+    >>> rel = release_energy_fingers(mesh_part(plate), fingers, n_translation=16, levels=1,
+    ...                              noise=False)           # doctest: +SKIP
+    >>> rel.U_A > 0, rel.deform_closure, rel.path.shape[1]  # doctest: +SKIP
+    (True, True, 3)
+    """
+    fingers = as_fingers(fingers)
+    _check_lattice(n_translation, levels, max_evaluations)
+    return _release(mesh, fingers, part=part, solver=solver, start=start, rigid_closed=rigid_closed,
+                    n_translation=n_translation, levels=levels, noise=noise, twin=twin, stop_above=stop_above,
+                    max_evaluations=max_evaluations, say=_reporter(progress), count=count)
+
+
+#: The lattice key of the equilibrium placement.
+_ORIGIN: Key = (0, 0, 0)
+
+
+def _reporter(progress: Callable[[str], None] | None) -> Callable[[str], None]:
+    """A function that logs a line and passes it to ``progress``."""
+    from ..log import logger
 
     def say(line: str) -> None:
         logger.info(line)
         if progress is not None:
             progress(line)
 
-    fingers = tuple(fingers)
+    return say
+
+
+def _check_lattice(n_translation: Any, levels: Any, max_evaluations: Any) -> None:
+    """Refuse lattice parameters and budgets that are not finite numbers in range."""
+    for name, v, ok, want in (("n_translation", n_translation, lambda x: x > 0, "> 0"),
+                              ("levels", levels, lambda x: x >= 0, ">= 0"),
+                              ("max_evaluations", max_evaluations, lambda x: x >= 0, ">= 0")):
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not math.isfinite(v) or not ok(v):
+            raise DeformClosureError(f"{name} = {v!r}: give a finite number {want}")
+
+
+def _release(mesh: Any, fingers: tuple[Finger, ...], *, part: Any, solver: Any, start: Any,
+             rigid_closed: bool | None, n_translation: int, levels: int, noise: bool, twin: Any,
+             stop_above: float | None, max_evaluations: int, say: Callable[[str], None],
+             count: Callable[[int], None] | None) -> FingerRelease:
+    """:func:`release_energy_fingers` in its named steps (module docstring)."""
+    t0 = time.perf_counter()
     pe = PlacementEnergy(mesh, fingers, solver=solver)
+    g0 = _start_placement(pe, start)
+    grid0 = _grid(pe, g0, n_translation, levels)
+    gstar = _minimise(pe, g0, grid0.h, grid0.h_phi)
+    grid = _grid(pe, gstar, n_translation, levels)
+    land = PlacementLandscape(pe, grid, max_evaluations, count)
+    Es = land.energy(_ORIGIN)
+    say(f"equilibrium placement ({gstar[0]:.4g} m, {gstar[1]:.4g} m, {gstar[2]:.4g} rad), "
+        f"E = {Es:.6g} J; lattice h = {grid.h:.3g} m, {grid.n_phi} angles")
+    tau = _start_noise(land, gstar, Es, noise, twin, part)
+    start_state = land.state(_ORIGIN)
+    strict = _strict_at_rest(pe, gstar, Es, rigid_closed, mesh, fingers)
+    res, tau = _minimax(land, Es, tau, stop_above)
+    if strict is None:
+        # strict beyond the noise: the placements within the noise floor of the start's
+        # energy (its plateau) stay within two lattice steps of it
+        strict = res.plateau <= 2 * grid.scale
+    say(f"coarse search: {land.n_evaluated} placements, barrier {res.barrier - Es:.6g} J, "
+        f"target {res.target}")
+    path, levels_U = _refine(land, res, levels, Es, tau)
+    Ep, U_A, U_err = _barrier(land, res, path, levels_U, Es, tau)
+    held = U_A > U_err
+    deform = bool(strict and held)
+    saddle = int(np.argmax(Ep)) if len(Ep) else None
+    ell, e_star, e_sad, e_L, U_L = _elastic_limit(mesh, pe, land, start_state, path, saddle, Es)
+    say(f"U_A = {U_A:.6g} J ± {U_err:.3g} J; {land.n_evaluated} placements solved")
+    return FingerRelease(
+        U_A=float(U_A), U_A_error=float(U_err), deform_closure=deform, strict=bool(strict),
+        caged=bool((not strict) and held), equilibrium=gstar, energy=float(Es),
+        path=np.array([grid.placement(k) for k in path]).reshape(-1, 3), path_energy=Ep, saddle=saddle,
+        target=res.target, noise_relative=float(tau), grid=grid, U_A_levels=levels_U, U_L=float(U_L),
+        quality=float(min(U_A, U_L) if deform else 0.0), strain=e_star, saddle_strain=e_sad,
+        critical_distance=float(ell), e_L=e_L, n_evaluations=land.n_evaluated, complete=bool(res.complete),
+        seconds=time.perf_counter() - t0, centroid=pe.centroid.copy(), contact_forces=start_state.forces,
+        contact_points=start_state.points, warnings=_point_finger_notes(start_state, fingers, Es))
+
+
+def _start_placement(pe: PlacementEnergy, start: Any) -> np.ndarray:
+    """The placement ``(x, y, φ)`` where the search for the equilibrium starts; refused
+    when a finger reaches deeper into the part there than the model allows."""
     if start is None:
         g0 = np.zeros(3)
     elif hasattr(start, "translation"):
         g0 = np.r_[np.asarray(start.translation, float), float(start.rotation)]
     else:
-        g0 = np.asarray(start, float).reshape(3)
+        try:
+            g0 = np.asarray(start, float).reshape(3)
+        except (TypeError, ValueError):
+            g0 = np.full(3, np.nan)
+    if not np.all(np.isfinite(g0)):
+        raise DeformClosureError(f"start = {start!r:.60}: give a placement [x, y, phi] (m, m, rad), an "
+                                 "EquilibriumResult or None for the rest placement")
     if not math.isfinite(pe.energy(g0).energy):
-        from ..errors import DeformClosureError
-
         raise DeformClosureError(
             "fingers: at the start placement a finger reaches deeper into the part than the "
             f"model allows ({pe.depth_limit:.3g} m, half the largest inscribed radius) or cuts "
             "through it; place the fingers against the part, touching or slightly overlapping it")
-    grid0 = _grid(pe, g0, n_translation, levels)
-    h, h_phi = grid0.h, grid0.h_phi
-    gstar = _minimise(pe, g0, h, h_phi)
-    grid = _grid(pe, gstar, n_translation, levels)
-    land = PlacementLandscape(pe, grid, max_evaluations, count)
-    S = grid.scale
-    s = (0, 0, 0)
-    Es = land.energy(s)
-    say(f"equilibrium placement ({gstar[0]:.4g} m, {gstar[1]:.4g} m, {gstar[2]:.4g} rad), "
-        f"E = {Es:.6g} J; lattice h = {grid.h:.3g} m, {grid.n_phi} angles")
-    # noise floor
+    return g0
+
+
+def _start_noise(land: PlacementLandscape, gstar: np.ndarray, Es: float, noise: bool, twin: Any,
+                 part: Any) -> float:
+    """The jitter noise floor at the equilibrium; with ``noise``, also the twin mesh
+    realisation of the landscape (given, or made from ``part``)."""
+    pe, grid = land.pe, land.grid
     tau = 0.0
     if noise and Es > 0:
         tau = jitter_noise(pe, gstar, grid.h, grid.h_phi, Es, angle=grid.angle)
@@ -754,61 +841,73 @@ def release_energy_fingers(
 
             twin = PadContact(twin_mesh(part))
         if twin is not None:
-            land.twin = PlacementEnergy(twin.mesh, fingers, solver=twin, centroid=pe.centroid,
+            land.twin = PlacementEnergy(twin.mesh, pe.fingers, solver=twin, centroid=pe.centroid,
                                         disc_axes_=pe.disc_axes)
-    # strict minimum?
-    start_state = land.state(s)
-    if Es == 0.0:
-        touching = _touching(pe, gstar)
-        if not touching:
-            strict = False
-        else:
-            if rigid_closed is None:
-                from .closure import deform_closure
+    return tau
 
-                rigid_closed = deform_closure(mesh, fingers).deform_closure
-            strict = bool(rigid_closed)
-    else:
-        strict = None  # decided after the noise floor is known
-    # minimax, repeated while the noise floor measured by the twin on the placements the
-    # search settled rises
+
+def _strict_at_rest(pe: PlacementEnergy, gstar: np.ndarray, Es: float, rigid_closed: bool | None, mesh: Any,
+                    fingers: Sequence[Finger]) -> bool | None:
+    """At rest (``E* = 0``) the equilibrium is strict iff a finger touches and the rigid
+    part is in form closure (Thm 1); ``None`` otherwise (decided from the noise plateau)."""
+    if Es != 0.0:
+        return None
+    if not _touching(pe, gstar):
+        return False
+    if rigid_closed is None:
+        from .closure import deform_closure
+
+        rigid_closed = deform_closure(mesh, fingers).deform_closure
+    return bool(rigid_closed)
+
+
+def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float | None) -> tuple[_Search, float]:
+    """The coarse minimax search, repeated while the noise floor measured by the twin on
+    the placements it settled rises. Returns the search and the noise floor."""
     for _ in range(4):
-        res = land.search(s, S, tau, stop_above=stop_above)
+        res = land.search(_ORIGIN, land.grid.scale, tau, stop_above=stop_above)
         if land.twin is None:
             break
         new = land.twin_noise(res.settled, 0.5 * Es)
         if new <= tau:
             break
         tau = new
-    if strict is None:
-        # strict beyond the noise: the placements within the noise floor of the start's
-        # energy (its plateau) stay within two lattice steps of it
-        strict = res.plateau <= 2 * S
-    say(f"coarse search: {land.n_evaluated} placements, barrier {res.barrier - Es:.6g} J, "
-        f"target {res.target}")
-    # refinement near the saddle
+    return res, tau
+
+
+def _refine(land: PlacementLandscape, res: _Search, levels: int, Es: float, tau: float) -> tuple[list, list]:
+    """The path searched again near its saddle on lattices halved ``levels`` times (boxes
+    of ±3 fine steps). Returns the path and ``U_A`` after each level."""
+    grid = land.grid
     path = res.path
     levels_U = [res.barrier - Es]
-    if res.complete and res.target is not None and math.isfinite(res.barrier) and len(path) > 1:
-        for lev in range(1, int(levels) + 1):
-            step = S >> lev
-            Ep = [land.energy(k) for k in path]
-            si = int(np.argmax(Ep))
-            if Ep[si] <= Es:
-                levels_U.append(levels_U[-1])
-                continue
-            half = 3 * step
-            c = path[si]
-            i_in = si
-            while i_in > 0 and grid.distance(path[i_in - 1], c) <= half:
-                i_in -= 1
-            i_out = si
-            while i_out < len(path) - 1 and grid.distance(path[i_out + 1], c) <= half:
-                i_out += 1
-            loc = land.search(path[i_in], step, tau, goal=path[i_out], box=(c, half))
-            if loc.target == "goal":
-                path = path[:i_in] + loc.path + path[i_out + 1:]
-            levels_U.append(max(land.energy(k) for k in path) - Es)
+    if not (res.complete and res.target is not None and math.isfinite(res.barrier) and len(path) > 1):
+        return path, levels_U
+    for lev in range(1, int(levels) + 1):
+        step = grid.scale >> lev
+        Ep = [land.energy(k) for k in path]
+        si = int(np.argmax(Ep))
+        if Ep[si] <= Es:
+            levels_U.append(levels_U[-1])
+            continue
+        half = 3 * step
+        c = path[si]
+        i_in = si
+        while i_in > 0 and grid.distance(path[i_in - 1], c) <= half:
+            i_in -= 1
+        i_out = si
+        while i_out < len(path) - 1 and grid.distance(path[i_out + 1], c) <= half:
+            i_out += 1
+        loc = land.search(path[i_in], step, tau, goal=path[i_out], box=(c, half))
+        if loc.target == "goal":
+            path = path[:i_in] + loc.path + path[i_out + 1:]
+        levels_U.append(max(land.energy(k) for k in path) - Es)
+    return path, levels_U
+
+
+def _barrier(land: PlacementLandscape, res: _Search, path: list, levels_U: list, Es: float,
+             tau: float) -> tuple[np.ndarray, float, float]:
+    """Energy along the path, ``U_A`` and its error estimate (module docstring, 3-5)."""
     Ep = np.array([land.energy(k) for k in path]) if path else np.zeros(0)
     barrier = float(Ep.max()) if len(Ep) else (math.inf if res.complete else res.barrier)
     if res.complete and res.target is None:
@@ -821,11 +920,13 @@ def release_energy_fingers(
     fin = [u for u in levels_U if math.isfinite(u)]
     grid_err = max((abs(a - b) for a, b in zip(fin[:-1], fin[1:])), default=0.0)
     U_err = grid_err + (tau * barrier if math.isfinite(barrier) else 0.0)
-    held = U_A > U_err
-    deform = bool(strict and held)
-    caged = bool((not strict) and held)
-    saddle = int(np.argmax(Ep)) if len(Ep) else None
-    # elastic limit over the critical distance
+    return Ep, U_A, U_err
+
+
+def _elastic_limit(mesh: Any, pe: PlacementEnergy, land: PlacementLandscape, start_state: PlacementState,
+                   path: list, saddle: int | None, Es: float) -> tuple:
+    """Critical distance ``ℓ`` (m), averaged strains at the equilibrium and the saddle,
+    ``e_L`` and ``U_L`` (J): the elastic limit over the critical distance."""
     from ..elasticity.critical_distance import averaging_operator
     from ..pads.limit import critical_distance_of
 
@@ -839,23 +940,17 @@ def release_energy_fingers(
         U_L = math.inf
     else:
         U_L = max(Es * ((e_L / e_star) ** 2 - 1.0), 0.0)
-    quality = min(U_A, U_L) if deform else 0.0
-    placements = np.array([grid.placement(k) for k in path]).reshape(-1, 3)
-    notes = []
-    points = sorted({int(i) for i in start_state.fingers if isinstance(fingers[int(i)], PointFinger)})
+    return ell, e_star, e_sad, e_L, U_L
+
+
+def _point_finger_notes(start_state: PlacementState, fingers: Sequence[Finger], Es: float) -> tuple[str, ...]:
+    """A warning when fingers without interior (points) press the part."""
+    points = sorted({int(i) for i in start_state.fingers if not fingers[int(i)].has_interior})
     if Es > 0 and points:
-        notes.append(f"point fingers {points} press the part: a point force in 2-D has no finite "
-                     "stiffness, so the energies and U_A follow the mesh; refine it or model the "
-                     "fingertips as discs")
-    say(f"U_A = {U_A:.6g} J ± {U_err:.3g} J; {land.n_evaluated} placements solved")
-    return FingerRelease(
-        U_A=float(U_A), U_A_error=float(U_err), deform_closure=deform, strict=bool(strict), caged=caged,
-        equilibrium=gstar, energy=float(Es), path=placements, path_energy=Ep, saddle=saddle,
-        target=res.target, noise_relative=float(tau), grid=grid, U_A_levels=levels_U, U_L=float(U_L),
-        quality=float(quality), strain=e_star, saddle_strain=e_sad, critical_distance=float(ell),
-        e_L=e_L, n_evaluations=land.n_evaluated, complete=bool(res.complete),
-        seconds=time.perf_counter() - t0, centroid=pe.centroid.copy(), contact_forces=start_state.forces,
-        contact_points=start_state.points, warnings=tuple(notes))
+        return (f"point fingers {points} press the part: a point force in 2-D has no finite "
+                "stiffness, so the energies and U_A follow the mesh; refine it or model the "
+                "fingertips as discs",)
+    return ()
 
 
 def _touching(pe: PlacementEnergy, g: np.ndarray) -> bool:

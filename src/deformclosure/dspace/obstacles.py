@@ -36,13 +36,17 @@ K. Gopalakrishnan and K. Goldberg, IJRR 24(11), 2005, §3.2 (D-obstacles, ``D_fr
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
 
 from .energy import as_configurations
-from .fingers import DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger
+from .. import geometry
+from ..errors import DeformClosureError
+from ..geometry import TOUCH_TOLERANCE
+from .fingers import Finger, segment_distance
 from .topology import DEFAULT_MIN_AREA_RATIO, in_dt, loop_edges
 
 __all__ = [
@@ -54,26 +58,39 @@ __all__ = [
     "boundary_gaps",
 ]
 
-#: Contacts count as touching within this fraction of the part's diameter (SPEC §3).
-TOUCH_TOLERANCE = 1e-9
-
-
 def touch_tolerance(mesh: Any) -> float:
-    """Touching tolerance of a mesh: ``1e-9`` x its diameter (m)."""
-    return TOUCH_TOLERANCE * float(mesh.diameter)
+    """Touching tolerance (m) of a mesh: :func:`deformclosure.geometry.touch_tolerance` of
+    its diameter, ``1e-9`` x ``mesh.diameter`` (SPEC §3)."""
+    return geometry.touch_tolerance(mesh.diameter)
+
+
+def resolve_tolerance(mesh: Any, tol: float | None) -> float:
+    """``tol`` (m) as a float, or the mesh's touching tolerance when ``None``.
+
+    Raises
+    ------
+    DeformClosureError
+        ``tol`` is not a finite number >= 0.
+    """
+    if tol is None:
+        return touch_tolerance(mesh)
+    return nonnegative(tol, "tol", "the touching tolerance in m", "or None for 1e-9 x the part's diameter")
+
+
+def nonnegative(value: Any, name: str, what: str, alternative: str = "") -> float:
+    """``value`` as a finite float >= 0; :class:`DeformClosureError` naming ``name`` and
+    asking for ``what`` (``alternative``: what else may be given) otherwise."""
+    try:
+        out = float(value)
+    except (TypeError, ValueError):
+        out = math.nan
+    if not (math.isfinite(out) and out >= 0.0):
+        raise DeformClosureError(f"{name} = {value!r:.60}: give {what} as a finite number >= 0"
+                                 + (f", {alternative}" if alternative else ""))
+    return out
 
 
 # ----------------------------------------------------------------------------- kernels
-
-
-def _seg_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Distance from point(s) ``p`` to closed segments ``a-b`` (broadcast over ``...``)."""
-    ab = b - a
-    ap = p - a
-    den = np.einsum("...j,...j->...", ab, ab)
-    s = np.clip(np.einsum("...j,...j->...", ap, ab) / np.where(den > 0, den, 1.0), 0.0, 1.0)
-    d = ap - s[..., None] * ab
-    return np.sqrt(np.einsum("...j,...j->...", d, d))
 
 
 def _crosses(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -83,18 +100,6 @@ def _crosses(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     dy = np.where(straddle, by - ay, 1.0)
     xint = a[..., 0] + (py - ay) * (b[..., 0] - a[..., 0]) / dy
     return straddle & (p[..., 0] < xint)
-
-
-def _clip_hits(a: np.ndarray, b: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Cyrus-Beck: does closed segment ``a-b`` meet the open polygon ``{m_j . x < h_j}``?"""
-    num = offsets - a @ normals.T  # (..., k)
-    den = (b - a) @ normals.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = num / den
-    upper = np.min(np.where(den > 0, ratio, np.inf), axis=-1)
-    lower = np.max(np.where(den < 0, ratio, -np.inf), axis=-1)
-    parallel_ok = np.all((den != 0) | (num > 0), axis=-1)
-    return parallel_ok & (lower < upper) & (lower < 1.0) & (upper > 0.0)
 
 
 @dataclass
@@ -110,43 +115,36 @@ class _Terms:
 
 
 def _edge_terms(finger: Finger, a: np.ndarray, b: np.ndarray, tol: float) -> _Terms:
-    """Reductions over the edges axis (second to last) of segment arrays ``(..., E, 2)``."""
+    """Reductions over the edges axis (second to last) of segment arrays ``(..., E, 2)``.
+
+    The crossing parity is that of the finger's probe point (none for a half-plane); the
+    distance to the nearest edge matters only for a body without interior (a point)."""
     shape = a.shape[:-2]
     no = np.zeros(shape, dtype=bool)
     inf = np.full(shape, np.inf)
     if a.shape[-2] == 0:
         return _Terms(no, no.copy(), inf)
-    if isinstance(finger, HalfPlaneFinger):
-        n = np.asarray(finger.normal)
-        p0 = np.asarray(finger.point)
-        hit = np.any(((a - p0) @ n < -tol) | ((b - p0) @ n < -tol), axis=-1)
-        return _Terms(hit, no, inf)
+    hit = np.any(finger.segment_hits(a, b, tol), axis=-1)
     probe = finger.probe_point()
+    if probe is None:
+        return _Terms(hit, no, inf)
     parity = np.logical_xor.reduce(_crosses(a, b, probe), axis=-1)
-    if isinstance(finger, PointFinger):
-        return _Terms(no, parity, np.min(_seg_dist(a, b, probe), axis=-1))
-    if isinstance(finger, DiscFinger):
-        hit = np.any(_seg_dist(a, b, probe) < finger.radius - tol, axis=-1)
-        return _Terms(hit, parity, inf)
-    if isinstance(finger, PolygonFinger):
-        hit = np.any(_clip_hits(a, b, finger.normals, finger.offsets - tol), axis=-1)
-        return _Terms(hit, parity, inf)
-    raise TypeError(f"unknown finger {finger!r}")
+    mind = inf if finger.has_interior else np.min(segment_distance(a, b, probe), axis=-1)
+    return _Terms(hit, parity, mind)
 
 
-def _collides(finger: Finger, t: _Terms, tol: float) -> np.ndarray:
-    if isinstance(finger, HalfPlaneFinger):
-        return t.hit
-    if isinstance(finger, PointFinger):
-        return t.parity & (t.mind > tol)
-    return t.hit | t.parity
+def _collides(t: _Terms, tol: float) -> np.ndarray:
+    """The open (eroded) finger meets the part's interior: some edge meets it, or its
+    probe point is inside the part (for a point: farther than ``tol`` from the boundary;
+    a body with interior has ``mind = inf``)."""
+    return t.hit | (t.parity & (t.mind > tol))
 
 
 def _obstacles(qb: np.ndarray, edges: np.ndarray, fingers: Sequence[Finger], tol: float) -> np.ndarray:
     a, b = qb[:, edges[:, 0]], qb[:, edges[:, 1]]
     out = np.zeros((len(qb), len(fingers)), dtype=bool)
     for i, f in enumerate(fingers):  # loop over the few fingers only
-        out[:, i] = _collides(f, _edge_terms(f, a, b, tol), tol)
+        out[:, i] = _collides(_edge_terms(f, a, b, tol), tol)
     return out
 
 
@@ -170,7 +168,7 @@ def dobstacle_mask(mesh: Any, q: Any, fingers: Sequence[Finger], tol: float | No
     ndarray of bool, shape (n_fingers,) or (b, n_fingers)
     """
     qb, batched = as_configurations(q, len(mesh.nodes))
-    tol = touch_tolerance(mesh) if tol is None else float(tol)
+    tol = resolve_tolerance(mesh, tol)
     out = _obstacles(qb, loop_edges(mesh.loops), list(fingers), tol)
     return out if batched else out[0]
 
@@ -401,81 +399,121 @@ def contact_rows(
     A corner on the inner side of an edge line only counts as penetrating that edge when
     it is inside the part and that edge is (one of) the nearest, so thin walls are safe.
     """
-    edges = bd.edges
-    a, b = x[edges[:, 0]], x[edges[:, 1]]
-    ab = b - a
-    ell2 = np.einsum("ij,ij->i", ab, ab)
-    n_in = bd.inward_normals(x)
-    nodes = bd.nodes
-    xn = x[nodes]
-    if x_ref is not None:
-        x_ref = np.asarray(x_ref, dtype=float)
-        xf = x_ref if feet_ref is None else np.asarray(feet_ref, dtype=float)
-        a_ref, ab_ref = xf[edges[:, 0]], xf[edges[:, 1]] - xf[edges[:, 0]]
-    else:
-        a_ref, ab_ref = a, ab
-    ell2_ref = np.einsum("ij,ij->i", ab_ref, ab_ref)
-    n_dir = n_in if x_ref is None else bd.inward_normals(x_ref if normals_ref is None else normals_ref)
+    geo = _EdgeGeometry(bd, x, x_ref, normals_ref, feet_ref)
     parts: list[ContactRows] = []
     for fi, f in enumerate(fingers):
-        # boundary nodes against the finger body
-        if f.has_interior:
-            sd = f.signed_distance(xn)
-            sel = sd < radius  # every penetrating node, however deep
-            if np.any(sel):
-                v = nodes[sel]
-                dirn = f.outward_normal(xn[sel] if x_ref is None else x_ref[v])
-                parts.append(_rows(fi, NODE_BODY, -1, v, np.stack([v, v], 1),
-                                   np.c_[np.ones(len(v)), np.zeros(len(v))], dirn, sd[sel], xn[sel]))
-        corners = f.vertices
-        if len(corners):
-            inside = bd.inside(x, corners)
-            rel = corners[:, None, :] - a[None]  # (k, E, 2)
-            s = np.einsum("kej,ej->ke", rel, ab) / ell2  # foot point in the current geometry
-            # the material point carrying the force: foot point in the reference geometry
-            s_ref = np.einsum("kej,ej->ke", corners[:, None, :] - a_ref[None], ab_ref) / ell2_ref
-            s_w = np.clip(s_ref, 0, 1)
-            g = -np.einsum("kej,ej->ke", rel, n_in)  # outward distance to the edge line
-            seg = _seg_dist(a[None], b[None], corners[:, None, :])  # (k, E)
-            dmin = seg.min(axis=1, keepdims=True)
-            # small-displacement theory: the contact's material point is fixed at rest
-            s_sel = s if x_ref is None else s_ref
-            on = (s_sel >= 0) & (s_sel <= 1)
-            eps = 1e-12 * np.sqrt(ell2)  # on the edge up to round-off: touching, inside or not
-            ok = on & (((g >= -eps) & (g < radius)) | (inside[:, None] & (g < 0) & (-g <= dmin + 1e-9 * np.sqrt(ell2))))
-            kk, ee = np.nonzero(ok)
-            if len(kk):
-                ss = s_w[kk, ee]
-                parts.append(_rows(fi, CORNER_EDGE, kk, ee, edges[ee], np.c_[1 - ss, ss], n_dir[ee], g[kk, ee],
-                                   a[ee] + ss[:, None] * ab[ee]))
-            # corners in the normal cone of a convex vertex (beyond both adjacent edges)
-            e_next = bd.edge_of[nodes]
-            e_prev = bd.edge_of[bd.prev[nodes]]
-            beyond = (s_sel[:, e_next] < 0) & (s_sel[:, e_prev] > 1) & ~inside[:, None]
-            dist = np.linalg.norm(corners[:, None, :] - xn[None], axis=-1)
-            kk, vv = np.nonzero(beyond & (dist < radius) & (dist > 0))
-            if len(kk):
-                ref = xn[vv] if x_ref is None else x_ref[nodes[vv]]
-                dirn = ref - corners[kk]
-                dirn = dirn / np.linalg.norm(dirn, axis=1, keepdims=True)
-                parts.append(_rows(fi, CORNER_NODE, kk, nodes[vv], np.stack([nodes[vv], nodes[vv]], 1),
-                                   np.c_[np.ones(len(vv)), np.zeros(len(vv))], dirn, dist[kk, vv], xn[vv]))
-        if isinstance(f, DiscFinger):
-            c = np.asarray(f.center)
-            rel = c - a
-            s = np.einsum("ej,ej->e", rel, ab) / ell2
-            s_ref = np.einsum("ej,ej->e", c - a_ref, ab_ref) / ell2_ref
-            s_w = np.clip(s_ref, 0, 1)
-            gl = -np.einsum("ej,ej->e", rel, n_in)
-            gap = gl - f.radius
-            inner = (s > 0) & (s < 1) if x_ref is None else (s_ref > 0) & (s_ref < 1)
-            ok = inner & (gl >= 0) & (np.abs(gap) < radius)
-            ee = np.flatnonzero(ok)
-            if len(ee):
-                ss = s_w[ee]
-                parts.append(_rows(fi, DISC_EDGE, -1, ee, edges[ee], np.c_[1 - ss, ss], n_dir[ee], gap[ee],
-                                   a[ee] + ss[:, None] * ab[ee]))
+        parts += _body_rows(geo, fi, f, radius)
+        if len(f.vertices):
+            parts += _corner_rows(geo, fi, f, radius)
+        parts += _round_rows(geo, fi, f, radius)
     return ContactRows.concat(parts)
+
+
+class _EdgeGeometry:
+    """The boundary edges of configuration ``x`` for :func:`contact_rows`: ends ``a``,
+    ``b``, vectors ``ab``, squared lengths, inward normals; with ``x_ref`` the reference
+    geometry of the force directions and material points (see :func:`contact_rows`)."""
+
+    def __init__(self, bd: BoundaryModel, x: np.ndarray, x_ref: np.ndarray | None,
+                 normals_ref: np.ndarray | None, feet_ref: np.ndarray | None):
+        self.bd, self.x = bd, x
+        edges = self.edges = bd.edges
+        self.a, self.b = x[edges[:, 0]], x[edges[:, 1]]
+        self.ab = self.b - self.a
+        self.ell2 = np.einsum("ij,ij->i", self.ab, self.ab)
+        self.n_in = bd.inward_normals(x)
+        self.nodes = bd.nodes
+        self.xn = x[self.nodes]
+        if x_ref is not None:
+            x_ref = np.asarray(x_ref, dtype=float)
+            xf = x_ref if feet_ref is None else np.asarray(feet_ref, dtype=float)
+            self.a_ref, self.ab_ref = xf[edges[:, 0]], xf[edges[:, 1]] - xf[edges[:, 0]]
+        else:
+            self.a_ref, self.ab_ref = self.a, self.ab
+        self.x_ref = x_ref
+        self.ell2_ref = np.einsum("ij,ij->i", self.ab_ref, self.ab_ref)
+        self.n_dir = self.n_in if x_ref is None else bd.inward_normals(x_ref if normals_ref is None else normals_ref)
+
+    def rest_or_current(self, v: np.ndarray, current: np.ndarray) -> np.ndarray:
+        """Positions of nodes ``v`` in the reference geometry, else ``current``."""
+        return current if self.x_ref is None else self.x_ref[v]
+
+
+def _body_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> list[ContactRows]:
+    """Boundary nodes against the finger body: every penetrating node, however deep."""
+    if not f.has_interior:
+        return []
+    sd = f.signed_distance(geo.xn)
+    sel = sd < radius
+    if not np.any(sel):
+        return []
+    v = geo.nodes[sel]
+    dirn = f.outward_normal(geo.rest_or_current(v, geo.xn[sel]))
+    return [_rows(fi, NODE_BODY, -1, v, np.stack([v, v], 1), np.c_[np.ones(len(v)), np.zeros(len(v))], dirn,
+                  sd[sel], geo.xn[sel])]
+
+
+def _corner_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> list[ContactRows]:
+    """Finger corners against boundary edges, and against convex vertices whose normal
+    cone holds them."""
+    a, b, ab, n_in, xn, nodes, bd = geo.a, geo.b, geo.ab, geo.n_in, geo.xn, geo.nodes, geo.bd
+    corners = f.vertices
+    out: list[ContactRows] = []
+    inside = bd.inside(geo.x, corners)
+    rel = corners[:, None, :] - a[None]  # (k, E, 2)
+    s = np.einsum("kej,ej->ke", rel, ab) / geo.ell2  # foot point in the current geometry
+    # the material point carrying the force: foot point in the reference geometry
+    s_ref = np.einsum("kej,ej->ke", corners[:, None, :] - geo.a_ref[None], geo.ab_ref) / geo.ell2_ref
+    s_w = np.clip(s_ref, 0, 1)
+    g = -np.einsum("kej,ej->ke", rel, n_in)  # outward distance to the edge line
+    seg = segment_distance(a[None], b[None], corners[:, None, :])  # (k, E)
+    dmin = seg.min(axis=1, keepdims=True)
+    # small-displacement theory: the contact's material point is fixed at rest
+    s_sel = s if geo.x_ref is None else s_ref
+    on = (s_sel >= 0) & (s_sel <= 1)
+    eps = 1e-12 * np.sqrt(geo.ell2)  # on the edge up to round-off: touching, inside or not
+    ok = on & (((g >= -eps) & (g < radius)) | (inside[:, None] & (g < 0) & (-g <= dmin + 1e-9 * np.sqrt(geo.ell2))))
+    kk, ee = np.nonzero(ok)
+    if len(kk):
+        ss = s_w[kk, ee]
+        out.append(_rows(fi, CORNER_EDGE, kk, ee, geo.edges[ee], np.c_[1 - ss, ss], geo.n_dir[ee], g[kk, ee],
+                         a[ee] + ss[:, None] * ab[ee]))
+    # corners in the normal cone of a convex vertex (beyond both adjacent edges)
+    e_next = bd.edge_of[nodes]
+    e_prev = bd.edge_of[bd.prev[nodes]]
+    beyond = (s_sel[:, e_next] < 0) & (s_sel[:, e_prev] > 1) & ~inside[:, None]
+    dist = np.linalg.norm(corners[:, None, :] - xn[None], axis=-1)
+    kk, vv = np.nonzero(beyond & (dist < radius) & (dist > 0))
+    if len(kk):
+        ref = geo.rest_or_current(nodes[vv], xn[vv])
+        dirn = ref - corners[kk]
+        dirn = dirn / np.linalg.norm(dirn, axis=1, keepdims=True)
+        out.append(_rows(fi, CORNER_NODE, kk, nodes[vv], np.stack([nodes[vv], nodes[vv]], 1),
+                         np.c_[np.ones(len(vv)), np.zeros(len(vv))], dirn, dist[kk, vv], xn[vv]))
+    return out
+
+
+def _round_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> list[ContactRows]:
+    """A circular finger boundary against boundary edges whose foot point it faces."""
+    rc = f.round_centre()
+    if rc is None:
+        return []
+    c, r = rc
+    a, ab = geo.a, geo.ab
+    rel = c - a
+    s = np.einsum("ej,ej->e", rel, ab) / geo.ell2
+    s_ref = np.einsum("ej,ej->e", c - geo.a_ref, geo.ab_ref) / geo.ell2_ref
+    s_w = np.clip(s_ref, 0, 1)
+    gl = -np.einsum("ej,ej->e", rel, geo.n_in)
+    gap = gl - r
+    inner = (s > 0) & (s < 1) if geo.x_ref is None else (s_ref > 0) & (s_ref < 1)
+    ok = inner & (gl >= 0) & (np.abs(gap) < radius)
+    ee = np.flatnonzero(ok)
+    if not len(ee):
+        return []
+    ss = s_w[ee]
+    return [_rows(fi, DISC_EDGE, -1, ee, geo.edges[ee], np.c_[1 - ss, ss], geo.n_dir[ee], gap[ee],
+                  a[ee] + ss[:, None] * ab[ee])]
 
 
 def refresh_rows(rows: ContactRows, bd: BoundaryModel, x: np.ndarray, fingers: Sequence[Finger]) -> ContactRows:
@@ -496,8 +534,11 @@ def refresh_rows(rows: ContactRows, bd: BoundaryModel, x: np.ndarray, fingers: S
             u, w = edges[out.element[i]]
             t = x[w] - x[u]
             n_in = np.array([-t[1], t[0]]) / np.linalg.norm(t)
-            p = f.vertices[out.corner[i]] if k == CORNER_EDGE else np.asarray(f.center)
-            out.gap[i] = float(-n_in @ (p - x[u])) - (f.radius if k == DISC_EDGE else 0.0)
+            if k == CORNER_EDGE:
+                p, r = f.vertices[out.corner[i]], 0.0
+            else:                                   # DISC_EDGE: the circular boundary
+                p, r = f.round_centre()
+            out.gap[i] = float(-n_in @ (p - x[u])) - r
     return out
 
 

@@ -20,7 +20,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import DeformClosureError
-from .fingers import DiscFinger, Finger, PointFinger, PolygonFinger
+from .fingers import Finger
 
 __all__ = ["FingerPlacementError", "finger_depths", "check_finger_placement", "MAX_DEPTH_RATIO"]
 
@@ -37,23 +37,6 @@ def _part_polygon(mesh: Any):
 
     rings = [mesh.nodes[np.asarray(loop)] for loop in mesh.loops]
     return shapely.Polygon(rings[0], rings[1:])
-
-
-def _samples(f: Finger) -> np.ndarray:
-    """Points of the finger body whose depth in the part is measured (m)."""
-    if isinstance(f, PointFinger):
-        return np.asarray(f.vertices, dtype=float).reshape(-1, 2)
-    if isinstance(f, DiscFinger):
-        t = np.linspace(0.0, 2 * np.pi, 64, endpoint=False)
-        c = np.asarray(f.center, dtype=float)
-        ring = c + f.radius * np.c_[np.cos(t), np.sin(t)]
-        inner = c + 0.5 * f.radius * np.c_[np.cos(t[::4]), np.sin(t[::4])]
-        return np.vstack([c, inner, ring])
-    if isinstance(f, PolygonFinger):
-        v = np.asarray(f.vertices, dtype=float)
-        mid = 0.5 * (v + np.roll(v, -1, axis=0))
-        return np.vstack([v, mid, v.mean(axis=0)])
-    return np.zeros((0, 2))  # half-plane: measured by the boundary nodes it covers
 
 
 def finger_depths(mesh: Any, fingers: Sequence[Finger]) -> np.ndarray:
@@ -79,7 +62,7 @@ def finger_depths(mesh: Any, fingers: Sequence[Finger]) -> np.ndarray:
     out = np.zeros(len(fingers))
     for i, f in enumerate(fingers):  # a handful of fingers; each query is vectorised
         depth = 0.0
-        pts = _samples(f)
+        pts = f.depth_samples()
         if len(pts):
             g = shapely.points(pts)
             inside = shapely.contains_xy(poly, pts[:, 0], pts[:, 1])

@@ -76,15 +76,14 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
-from .fingers import DiscFinger, Finger, HalfPlaneFinger, PointFinger, PolygonFinger
-from .obstacles import BoundaryModel, touch_tolerance
+from .fingers import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
+from .obstacles import BoundaryModel, resolve_tolerance
 from .placement import MAX_DEPTH_RATIO
-from ..pads.geometry import FLANK_ANGLE
 
 __all__ = ["PlacementEnergy", "PlacementState", "inscribed_radius", "disc_axes"]
 
-# finger codes
-_POINT, _DISC, _POLYGON, _HALFPLANE = 0, 1, 2, 3
+# finger codes (:meth:`Finger.kernel_encoding`)
+_POINT, _DISC, _POLYGON, _HALFPLANE = KERNEL_POINT, KERNEL_DISC, KERNEL_POLYGON, KERNEL_HALFPLANE
 # row kinds
 _NODE_BODY, _CORNER_EDGE, _CORNER_NODE, _CENTRE_EDGE, _DISC_EDGE = 0, 1, 2, 3, 4
 
@@ -208,6 +207,207 @@ def _inside_and_distance(px, py, xb, ea, eb):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _new_rows(cap):  # pragma: no cover - compiled
+    """Empty row storage of capacity ``cap``: ``(kind, finger, corner, element, na, nb, wa,
+    wb, dx, dy, gap, px, py)``."""
+    return (np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap, np.int64),
+            np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap), np.empty(cap), np.empty(cap),
+            np.empty(cap), np.empty(cap), np.empty(cap), np.empty(cap))
+
+
+@njit(cache=True, nogil=True)
+def _put(rows, n, kind, f, corner, element, na, nb, wa, wb, dx, dy, gap, px, py):  # pragma: no cover
+    """Store row ``n`` (see :func:`_new_rows`); returns ``n + 1``."""
+    rows[0][n], rows[1][n], rows[2][n], rows[3][n] = kind, f, corner, element
+    rows[4][n], rows[5][n], rows[6][n], rows[7][n] = na, nb, wa, wb
+    rows[8][n], rows[9][n], rows[10][n], rows[11][n], rows[12][n] = dx, dy, gap, px, py
+    return n + 1
+
+
+@njit(cache=True, nogil=True)
+def _foot(part, e, wx, wy):  # pragma: no cover - compiled
+    """Edge ``e``'s start ``(ax, ay)`` and vector ``(ex, ey)``, the foot parameter ``s`` of
+    the point ``(wx, wy)`` on it and the point's distance ``gl`` to its line (> 0 outside)."""
+    xb, ea, eb, en, el2 = part[0], part[1], part[2], part[3], part[4]
+    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+    s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
+    gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])
+    return ax, ay, ex, ey, s, gl
+
+
+@njit(cache=True, nogil=True)
+def _put_edge(rows, n, kind, f, corner, part, e, s, gap):  # pragma: no cover - compiled
+    """Store a row on edge ``e`` at foot parameter ``s``: force along its inward normal,
+    shared by its end nodes."""
+    xb, ea, eb, en = part[0], part[1], part[2], part[3]
+    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
+    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
+    return _put(rows, n, kind, f, corner, e, ea[e], eb[e], 1.0 - s, s, en[e, 0], en[e, 1], gap,
+                ax + s * ex, ay + s * ey)
+
+
+@njit(cache=True, nogil=True)
+def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth):  # pragma: no cover
+    """Boundary nodes against the body of finger ``f``: rows with a gap below ``radius``
+    (when ``emit``), and the deepest node. Returns ``(n, any node inside, pmax, depth)``."""
+    pv, pn, po = fg[1], fg[2], fg[3]
+    xb = part[0]
+    anyin = False
+    for i in range(xb.shape[0]):
+        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1])
+        if sd < 0:
+            anyin = True
+        if -sd > pmax:
+            pmax = -sd
+        if -sd > depth:
+            depth = -sd
+        if emit and sd < radius:
+            n = _put(rows, n, _NODE_BODY, f, -1, i, i, i, 1.0, 0.0, ox, oy, sd, xb[i, 0], xb[i, 1])
+    return n, anyin, pmax, depth
+
+
+@njit(cache=True, nogil=True)
+def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax):  # pragma: no cover
+    """A disc outside the part with no node inside it, against the edges whose foot point
+    it faces and whose end nodes are outside it: between two nodes a straight edge may cut
+    the disc while both stay outside it (a mesh coarse for the disc). One pass serves both
+    uses: with ``emit`` it stores the rows with a gap below ``radius``, without it raises
+    ``pmax`` to the deepest such cut. Returns ``(n, pmax)``."""
+    pv, pn, po = fg[1], fg[2], fg[3]
+    for e in range(part[1].shape[0]):
+        ax, ay, ex, ey, s, gl = _foot(part, e, wx, wy)
+        if s <= 0.0 or s >= 1.0:
+            continue
+        if emit:
+            if not (gl >= 0 and gl - off < radius):
+                continue
+        elif not (gl >= 0 and off - gl > pmax):
+            continue
+        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay)[0]
+        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
+        if sa > 0 and sb > 0:
+            if emit:
+                n = _put_edge(rows, n, _DISC_EDGE, f, -1, part, e, s, gl - off)
+            else:
+                pmax = off - gl
+    return n, pmax
+
+
+@njit(cache=True, nogil=True)
+def _nearest_edge(t, vs, ve, pv, part, wx, wy, off, dmin):  # pragma: no cover - compiled
+    """For a corner (or disc centre, offset ``off``) inside the part at distance ``dmin``
+    from the boundary: among the nearest edges (within twice that distance) the one the
+    finger crosses least deeply — for a polygon the depth of the whole polygon past the
+    edge's line (separating axes), so a finger corner passing a part's corner presses its
+    side, not its end. Returns ``(edge or -1, its gl, its s)``."""
+    en, el2 = part[3], part[4]
+    best, bdepth, bgl, bs = -1, np.inf, 0.0, 0.0
+    for e in range(part[1].shape[0]):
+        ax, ay, ex, ey, s, gl = _foot(part, e, wx, wy)
+        if s < 0.0 or s > 1.0:
+            continue
+        if gl >= 0 or -gl > 2.0 * dmin + 1e-12 * np.sqrt(el2[e]):
+            continue
+        dep = -gl + off
+        if t == _POLYGON:
+            for j in range(vs, ve):
+                dep = max(dep, (pv[j, 0] - ax) * en[e, 0] + (pv[j, 1] - ay) * en[e, 1])
+        if dep < bdepth * (1 - 1e-12) or (dep <= bdepth * (1 + 1e-12) and gl > bgl):
+            best, bdepth, bgl, bs = e, dep, gl, s
+    return best, bgl, bs
+
+
+@njit(cache=True, nogil=True)
+def _outside_edges(f, k, part, wx, wy, radius, rows, n):  # pragma: no cover - compiled
+    """A corner outside the part against every edge whose foot point it has, gap below
+    ``radius`` (touching up to round-off counts)."""
+    el2 = part[4]
+    for e in range(part[1].shape[0]):
+        ax, ay, ex, ey, s, gl = _foot(part, e, wx, wy)
+        if s < 0.0 or s > 1.0:
+            continue
+        if gl >= -1e-12 * np.sqrt(el2[e]) and gl < radius:
+            n = _put_edge(rows, n, _CORNER_EDGE, f, k, part, e, s, gl)
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _vertex_rows(f, k, part, wx, wy, off, inside, dmin, got, radius, rows, n):  # pragma: no cover
+    """Corner ``k`` against boundary vertices: inside the part, when its nearest feature
+    is a vertex (no edge row ``got``), push that vertex past the corner; outside, a
+    convex vertex whose normal cone holds the corner."""
+    xb, ea, eb, el2, eprev, enext, convex = part[0], part[1], part[2], part[4], part[5], part[6], part[7]
+    for i in range(xb.shape[0]):
+        rx, ry = xb[i, 0] - wx, xb[i, 1] - wy
+        d = np.hypot(rx, ry)
+        if d <= 0:
+            continue
+        if inside:
+            ok = (not got) and d <= dmin * (1 + 1e-9) + 1e-12 * d
+            gp = -d - off
+            ux, uy = -rx / d, -ry / d
+        else:
+            if not convex[i] or d >= radius:
+                continue
+            e1, e0 = enext[i], eprev[i]
+            a1x, a1y = xb[ea[e1], 0], xb[ea[e1], 1]
+            s1 = ((wx - a1x) * (xb[eb[e1], 0] - a1x) + (wy - a1y) * (xb[eb[e1], 1] - a1y)) / el2[e1]
+            a0x, a0y = xb[ea[e0], 0], xb[ea[e0], 1]
+            s0 = ((wx - a0x) * (xb[eb[e0], 0] - a0x) + (wy - a0y) * (xb[eb[e0], 1] - a0y)) / el2[e0]
+            ok = s1 < 0 and s0 > 1      # in the vertex's normal cone
+            gp = d
+            ux, uy = rx / d, ry / d
+        if ok:
+            n = _put(rows, n, _CORNER_NODE, f, k, i, i, i, 1.0, 0.0, ux, uy, gp, xb[i, 0], xb[i, 1])
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, depth):  # pragma: no cover
+    """The corners of finger ``f`` (point finger, polygon corners) and a disc's centre:
+    inside the part they set the depth and press on their nearest edge or vertex; outside,
+    corners press on edges and convex vertices, and a disc on the edges cutting it.
+    Returns ``(n, pmax, depth)``."""
+    par, pv = fg[0], fg[1]
+    xb, ea, eb = part[0], part[1], part[2]
+    ncorner = 0
+    if t == _POINT or t == _DISC:
+        ncorner = 1
+    elif t == _POLYGON:
+        ncorner = ve - vs
+    for k in range(ncorner):
+        if t == _POLYGON:
+            wx, wy, off = pv[vs + k, 0], pv[vs + k, 1], 0.0
+        else:
+            wx, wy = par[f, 0], par[f, 1]
+            off = par[f, 2] if t == _DISC else 0.0
+        inside, dmin = _inside_and_distance(wx, wy, xb, ea, eb)
+        if inside:
+            if dmin + off > depth:
+                depth = dmin + off
+            if dmin + off > pmax:
+                pmax = dmin + off
+        elif t == _DISC:
+            if not anyin:       # once a node is inside, the node rows of SPEC §6 see the disc
+                n, pmax = _disc_edges(f, t, par[f], vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax)
+            continue
+        if not emit:
+            continue
+        got = False
+        if inside:
+            best, bgl, bs = _nearest_edge(t, vs, ve, pv, part, wx, wy, off, dmin)
+            if best >= 0:
+                n = _put_edge(rows, n, _CENTRE_EDGE if t == _DISC else _CORNER_EDGE, f, k, part, best, bs,
+                              bgl - off)
+            got = best >= 0
+        else:
+            n = _outside_edges(f, k, part, wx, wy, radius, rows, n)
+        n = _vertex_rows(f, k, part, wx, wy, off, inside, dmin, got, radius, rows, n)
+    return n, pmax, depth
+
+
+@njit(cache=True, nogil=True)
 def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar, vstart,
           verts, vnorm, cap):  # pragma: no cover - compiled
     """All contact rows with a gap below ``radius`` (when ``emit``) and, always, the
@@ -216,180 +416,22 @@ def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, 
     Returns ``(n, kind, finger, corner, element, na, nb, wa, wb, dx, dy, gap, px, py,
     pmax, depth)``; arrays have capacity ``cap``.
     """
-    par, pv, pn, po = _place_fingers(g, c, ftype, fpar, verts, vnorm)
-    nbn = xb.shape[0]
-    ne = ea.shape[0]
-    F = ftype.shape[0]
-    kind = np.empty(cap, np.int64)
-    finger = np.empty(cap, np.int64)
-    corner = np.empty(cap, np.int64)
-    element = np.empty(cap, np.int64)
-    na = np.empty(cap, np.int64)
-    nb = np.empty(cap, np.int64)
-    wa = np.empty(cap)
-    wb = np.empty(cap)
-    dx = np.empty(cap)
-    dy = np.empty(cap)
-    gap = np.empty(cap)
-    qx = np.empty(cap)
-    qy = np.empty(cap)
+    fg = _place_fingers(g, c, ftype, fpar, verts, vnorm)
+    part = (xb, ea, eb, en, el2, eprev, enext, convex)
+    rows = _new_rows(cap)
     n = 0
     pmax = 0.0
     depth = 0.0
-    for f in range(F):
+    for f in range(ftype.shape[0]):
         t = ftype[f]
         vs, ve = vstart[f], vstart[f + 1]
-        # -- boundary nodes against the body
         anyin = False
         if t != _POINT:
-            for i in range(nbn):
-                sd, ox, oy = _body_sd(t, par[f], vs, ve, pv, pn, po, xb[i, 0], xb[i, 1])
-                if sd < 0:
-                    anyin = True
-                if -sd > pmax:
-                    pmax = -sd
-                if -sd > depth:
-                    depth = -sd
-                if emit and sd < radius:
-                    kind[n], finger[n], corner[n], element[n] = _NODE_BODY, f, -1, i
-                    na[n], nb[n], wa[n], wb[n] = i, i, 1.0, 0.0
-                    dx[n], dy[n], gap[n], qx[n], qy[n] = ox, oy, sd, xb[i, 0], xb[i, 1]
-                    n += 1
-        # -- corners (point finger, polygon corners) and a disc centre inside the part
-        ncorner = 0
-        if t == _POINT or t == _DISC:
-            ncorner = 1
-        elif t == _POLYGON:
-            ncorner = ve - vs
-        for k in range(ncorner):
-            if t == _POLYGON:
-                wx, wy, off = pv[vs + k, 0], pv[vs + k, 1], 0.0
-            else:
-                wx, wy = par[f, 0], par[f, 1]
-                off = par[f, 2] if t == _DISC else 0.0
-            inside, dmin = _inside_and_distance(wx, wy, xb, ea, eb)
-            if inside:
-                if dmin + off > depth:
-                    depth = dmin + off
-                if dmin + off > pmax:
-                    pmax = dmin + off
-            elif t == _DISC:
-                # a disc outside the part, no node inside it, against an edge whose foot
-                # point it faces: between two nodes a straight edge may cut the disc while
-                # both stay outside it (a mesh coarse for the disc); once a node is inside,
-                # the node rows of SPEC §6 see the disc
-                if anyin:
-                    continue
-                if emit:
-                    for e in range(ne):
-                        ax, ay = xb[ea[e], 0], xb[ea[e], 1]
-                        ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
-                        s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
-                        if s <= 0.0 or s >= 1.0:
-                            continue
-                        gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])
-                        if not (gl >= 0 and gl - off < radius):
-                            continue
-                        sa = _body_sd(t, par[f], vs, ve, pv, pn, po, ax, ay)[0]
-                        sb = _body_sd(t, par[f], vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
-                        if sa > 0 and sb > 0:
-                            kind[n], finger[n], corner[n], element[n] = _DISC_EDGE, f, -1, e
-                            na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
-                            dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], gl - off
-                            qx[n], qy[n] = ax + s * ex, ay + s * ey
-                            n += 1
-                else:
-                    for e in range(ne):
-                        ax, ay = xb[ea[e], 0], xb[ea[e], 1]
-                        ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
-                        s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
-                        if s <= 0.0 or s >= 1.0:
-                            continue
-                        gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])
-                        if gl >= 0 and off - gl > pmax:
-                            sa = _body_sd(t, par[f], vs, ve, pv, pn, po, ax, ay)[0]
-                            sb = _body_sd(t, par[f], vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
-                            if sa > 0 and sb > 0:
-                                pmax = off - gl
-                continue
-            if not emit:
-                continue
-            got = False
-            if inside:
-                # one edge among the nearest (within twice the distance to the boundary):
-                # the one the finger crosses least deeply — for a polygon the depth of the
-                # whole polygon past the edge's line (separating axes), so a finger corner
-                # passing a part's corner presses its side, not its end; none (the nearest
-                # boundary point a vertex): the vertex row below
-                best, bdepth, bgl, bs = -1, np.inf, 0.0, 0.0
-                for e in range(ne):
-                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
-                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
-                    s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
-                    if s < 0.0 or s > 1.0:
-                        continue
-                    gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])   # > 0 outside
-                    if gl >= 0 or -gl > 2.0 * dmin + 1e-12 * np.sqrt(el2[e]):
-                        continue
-                    dep = -gl + off
-                    if t == _POLYGON:
-                        for j in range(vs, ve):
-                            dep = max(dep, (pv[j, 0] - ax) * en[e, 0] + (pv[j, 1] - ay) * en[e, 1])
-                    if dep < bdepth * (1 - 1e-12) or (dep <= bdepth * (1 + 1e-12) and gl > bgl):
-                        best, bdepth, bgl, bs = e, dep, gl, s
-                if best >= 0 and emit:
-                    e, s = best, bs
-                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
-                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
-                    kind[n] = _CENTRE_EDGE if t == _DISC else _CORNER_EDGE
-                    finger[n], corner[n], element[n] = f, k, e
-                    na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
-                    dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], bgl - off
-                    qx[n], qy[n] = ax + s * ex, ay + s * ey
-                    n += 1
-                got = best >= 0
-            else:
-                for e in range(ne):
-                    ax, ay = xb[ea[e], 0], xb[ea[e], 1]
-                    ex, ey = xb[eb[e], 0] - ax, xb[eb[e], 1] - ay
-                    s = ((wx - ax) * ex + (wy - ay) * ey) / el2[e]
-                    if s < 0.0 or s > 1.0:
-                        continue
-                    gl = -((wx - ax) * en[e, 0] + (wy - ay) * en[e, 1])   # > 0 outside
-                    if gl >= -1e-12 * np.sqrt(el2[e]) and gl < radius:
-                        kind[n] = _CORNER_EDGE
-                        finger[n], corner[n], element[n] = f, k, e
-                        na[n], nb[n], wa[n], wb[n] = ea[e], eb[e], 1.0 - s, s
-                        dx[n], dy[n], gap[n] = en[e, 0], en[e, 1], gl
-                        qx[n], qy[n] = ax + s * ex, ay + s * ey
-                        n += 1
-            for i in range(nbn):
-                rx, ry = xb[i, 0] - wx, xb[i, 1] - wy
-                d = np.hypot(rx, ry)
-                if d <= 0:
-                    continue
-                if inside:
-                    # nearest feature a vertex (no edge row): push that vertex past the corner
-                    ok = (not got) and d <= dmin * (1 + 1e-9) + 1e-12 * d
-                    gp = -d - off
-                    ux, uy = -rx / d, -ry / d
-                else:
-                    if not convex[i] or d >= radius:
-                        continue
-                    e1, e0 = enext[i], eprev[i]
-                    a1x, a1y = xb[ea[e1], 0], xb[ea[e1], 1]
-                    s1 = ((wx - a1x) * (xb[eb[e1], 0] - a1x) + (wy - a1y) * (xb[eb[e1], 1] - a1y)) / el2[e1]
-                    a0x, a0y = xb[ea[e0], 0], xb[ea[e0], 1]
-                    s0 = ((wx - a0x) * (xb[eb[e0], 0] - a0x) + (wy - a0y) * (xb[eb[e0], 1] - a0y)) / el2[e0]
-                    ok = s1 < 0 and s0 > 1      # in the vertex's normal cone
-                    gp = d
-                    ux, uy = rx / d, ry / d
-                if ok:
-                    kind[n], finger[n], corner[n], element[n] = _CORNER_NODE, f, k, i
-                    na[n], nb[n], wa[n], wb[n] = i, i, 1.0, 0.0
-                    dx[n], dy[n], gap[n], qx[n], qy[n] = ux, uy, gp, xb[i, 0], xb[i, 1]
-                    n += 1
-    return (n, kind, finger, corner, element, na, nb, wa, wb, dx, dy, gap, qx, qy, pmax, depth)
+            n, anyin, pmax, depth = _body_rows(f, t, fg[0][f], vs, ve, fg, part, radius, emit, rows, n, pmax,
+                                               depth)
+        n, pmax, depth = _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, depth)
+    return (n, rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9],
+            rows[10], rows[11], rows[12], pmax, depth)
 
 
 # ----------------------------------------------------------------------------- LCP
@@ -503,93 +545,76 @@ def _delassus(Y, dof, cf):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _solve_placement(g, tol, depth_limit, e_cap, warm, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype,
-                     fpar, vstart, verts, vnorm, ypos, Y, cap):  # pragma: no cover - compiled
-    """Energy of one placement. Returns ``(E, status, grad(3), active keys, selected rows, λ,
-    gaps, dx, dy, px, py, na, nb, wa, wb, finger)`` (rows: indices into the scan; the rest
-    per selected row, part frame, local boundary node indices).
-
-    status: 0 no contact (E = 0), 1 solved, 2 inadmissible, 3 LCP not converged.
-    """
-    z = _scan(g, 0.0, False, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar, vstart,
-              verts, vnorm, 1)
-    pmax, depth = z[14], z[15]
-    grad = np.zeros(3)
+def _no_solution(E, status):  # pragma: no cover - compiled
+    """The result of :func:`_solve_placement` without contact rows."""
     empty_i = np.zeros(0, np.int64)
     empty_f = np.zeros(0)
-    if depth > depth_limit:
-        return (np.inf, 2, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
-                empty_i, empty_i, empty_f, empty_f, empty_i)
-    if pmax <= tol:
-        return (0.0, 0, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
-                empty_i, empty_i, empty_f, empty_f, empty_i)
-    factor = 2.0
-    status = 1
-    lam = empty_f
-    sel = empty_i
-    W = np.zeros((0, 0))
-    key = empty_i
-    gap = empty_f
-    R = z
-    for attempt in range(8):
-        R = _scan(g, 2.0 * factor * pmax + tol, True, c, xb, ea, eb, en, el2, eprev, enext, convex,
-                  ftype, fpar, vstart, verts, vnorm, cap)
-        n = R[0]
-        kind, finger, corner, element = R[1][:n], R[2][:n], R[3][:n], R[4][:n]
-        na, nb, wa, wb, dx, dy, gap = R[5][:n], R[6][:n], R[7][:n], R[8][:n], R[9][:n], R[10][:n], R[11][:n]
-        nbn = xb.shape[0]
-        key = ((kind * 64 + finger) * 4096 + (corner + 1)) * (nbn + ea.shape[0] + 1) + element
-        cand = np.flatnonzero(gap < factor * pmax + tol)
-        sel = cand
-        dof, cf = _row_dofs(na, nb, wa, wb, dx, dy, ypos, sel)
-        W = _delassus(Y, dof, cf)
-        reg = 0.0
-        for i in range(W.shape[0]):
-            reg += W[i, i]
-        reg *= 1e-12 / max(W.shape[0], 1)
-        for i in range(W.shape[0]):
-            W[i, i] += reg
-        q = gap[sel] + tol
-        free0 = np.zeros(sel.shape[0], np.bool_)
-        for r in range(sel.shape[0]):
-            kk = key[sel[r]]
-            j = np.searchsorted(warm, kk)
-            if j < warm.shape[0] and warm[j] == kk:
-                free0[r] = True
-            elif q[r] < 0 and warm.shape[0] == 0:
-                free0[r] = True
-        lam, ok = _lcp(W, q, free0)
-        if not ok:
-            status = 3
-        # check the rows left out against the solution's displacement
-        rest = np.flatnonzero(gap >= factor * pmax + tol)
-        if rest.shape[0] == 0:
-            break
-        dof2, cf2 = _row_dofs(na, nb, wa, wb, dx, dy, ypos, rest)
-        worst = 0
-        for r in range(rest.shape[0]):
-            v = gap[rest[r]] + tol
-            for a in range(4):
-                if cf2[r, a] == 0.0:
+    return (E, status, np.zeros(3), empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
+            empty_i, empty_i, empty_f, empty_f, empty_i)
+
+
+@njit(cache=True, nogil=True)
+def _row_keys(R, n, n_ids):  # pragma: no cover - compiled
+    """Identity key of each of the ``n`` rows of scan ``R`` (warm starts)."""
+    kind, finger, corner, element = R[1][:n], R[2][:n], R[3][:n], R[4][:n]
+    return ((kind * 64 + finger) * 4096 + (corner + 1)) * n_ids + element
+
+
+@njit(cache=True, nogil=True)
+def _solve_rows(R, sel, key, tol, warm, ypos, Y):  # pragma: no cover - compiled
+    """The LCP of the rows ``sel`` of scan ``R``, warm-started from the active keys
+    ``warm`` (or, without them, from the penetrating rows). Returns ``(λ, ok, W, dof, cf)``."""
+    n = R[0]
+    na, nb, wa, wb, dx, dy, gap = R[5][:n], R[6][:n], R[7][:n], R[8][:n], R[9][:n], R[10][:n], R[11][:n]
+    dof, cf = _row_dofs(na, nb, wa, wb, dx, dy, ypos, sel)
+    W = _delassus(Y, dof, cf)
+    reg = 0.0
+    for i in range(W.shape[0]):
+        reg += W[i, i]
+    reg *= 1e-12 / max(W.shape[0], 1)
+    for i in range(W.shape[0]):
+        W[i, i] += reg
+    q = gap[sel] + tol
+    free0 = np.zeros(sel.shape[0], np.bool_)
+    for r in range(sel.shape[0]):
+        kk = key[sel[r]]
+        j = np.searchsorted(warm, kk)
+        if j < warm.shape[0] and warm[j] == kk:
+            free0[r] = True
+        elif q[r] < 0 and warm.shape[0] == 0:
+            free0[r] = True
+    lam, ok = _lcp(W, q, free0)
+    return lam, ok, W, dof, cf
+
+
+@njit(cache=True, nogil=True)
+def _n_violated(R, rest, sel, lam, dof, cf, tol, ypos, Y):  # pragma: no cover - compiled
+    """How many of the rows ``rest`` left out of the LCP the solution makes penetrate."""
+    n = R[0]
+    na, nb, wa, wb, dx, dy, gap = R[5][:n], R[6][:n], R[7][:n], R[8][:n], R[9][:n], R[10][:n], R[11][:n]
+    dof2, cf2 = _row_dofs(na, nb, wa, wb, dx, dy, ypos, rest)
+    worst = 0
+    for r in range(rest.shape[0]):
+        v = gap[rest[r]] + tol
+        for a in range(4):
+            if cf2[r, a] == 0.0:
+                continue
+            for s in range(sel.shape[0]):
+                if lam[s] == 0.0:
                     continue
-                for s in range(sel.shape[0]):
-                    if lam[s] == 0.0:
-                        continue
-                    for b in range(4):
-                        if cf[s, b] != 0.0:
-                            v += cf2[r, a] * Y[dof2[r, a], dof[s, b]] * cf[s, b] * lam[s]
-            if v < -tol:
-                worst += 1
-        if worst == 0:
-            break
-        factor *= 2.0
-    E = 0.5 * (lam @ (W @ lam))
-    if not E <= e_cap:
-        # beyond any small-strain state (contradictory contact rows: the finger cuts
-        # through the part): outside the model
-        return (np.inf, 2, grad, empty_i, empty_i, empty_f, empty_f, empty_f, empty_f, empty_f, empty_f,
-                empty_i, empty_i, empty_f, empty_f, empty_i)
-    # generalised force: dE/dg = −Σ λ_r [R d_r, (p_r − c) × d_r]
+                for b in range(4):
+                    if cf[s, b] != 0.0:
+                        v += cf2[r, a] * Y[dof2[r, a], dof[s, b]] * cf[s, b] * lam[s]
+        if v < -tol:
+            worst += 1
+    return worst
+
+
+@njit(cache=True, nogil=True)
+def _force_and_keys(g, c, R, sel, lam, key):  # pragma: no cover - compiled
+    """Generalised force ``dE/dg = −Σ λ_r [R d_r, (p_r − c) × d_r]`` and the sorted keys
+    of the pressing rows."""
+    grad = np.zeros(3)
     cph, sph = np.cos(g[2]), np.sin(g[2])
     nact = 0
     for s in range(sel.shape[0]):
@@ -606,8 +631,53 @@ def _solve_placement(g, tol, depth_limit, e_cap, warm, c, xb, ea, eb, en, el2, e
         if lam[s] > 0:
             act[k] = key[sel[s]]
             k += 1
-    act = np.sort(act)
-    return (E, status, grad, act, sel, lam, gap[sel], R[9][sel], R[10][sel], R[12][sel], R[13][sel],
+    return grad, np.sort(act)
+
+
+@njit(cache=True, nogil=True)
+def _solve_placement(g, tol, depth_limit, e_cap, warm, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype,
+                     fpar, vstart, verts, vnorm, ypos, Y, cap):  # pragma: no cover - compiled
+    """Energy of one placement. Returns ``(E, status, grad(3), active keys, selected rows, λ,
+    gaps, dx, dy, px, py, na, nb, wa, wb, finger)`` (rows: indices into the scan; the rest
+    per selected row, part frame, local boundary node indices).
+
+    status: 0 no contact (E = 0), 1 solved, 2 inadmissible, 3 LCP not converged.
+    """
+    z = _scan(g, 0.0, False, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, fpar, vstart,
+              verts, vnorm, 1)
+    pmax, depth = z[14], z[15]
+    if depth > depth_limit:
+        return _no_solution(np.inf, 2)
+    if pmax <= tol:
+        return _no_solution(0.0, 0)
+    factor = 2.0
+    status = 1
+    lam = np.zeros(0)
+    sel = np.zeros(0, np.int64)
+    W = np.zeros((0, 0))
+    key = np.zeros(0, np.int64)
+    R = z
+    for attempt in range(8):
+        R = _scan(g, 2.0 * factor * pmax + tol, True, c, xb, ea, eb, en, el2, eprev, enext, convex,
+                  ftype, fpar, vstart, verts, vnorm, cap)
+        key = _row_keys(R, R[0], xb.shape[0] + ea.shape[0] + 1)
+        gap = R[11][:R[0]]
+        sel = np.flatnonzero(gap < factor * pmax + tol)
+        lam, ok, W, dof, cf = _solve_rows(R, sel, key, tol, warm, ypos, Y)
+        if not ok:
+            status = 3
+        # check the rows left out against the solution's displacement
+        rest = np.flatnonzero(gap >= factor * pmax + tol)
+        if rest.shape[0] == 0 or _n_violated(R, rest, sel, lam, dof, cf, tol, ypos, Y) == 0:
+            break
+        factor *= 2.0
+    E = 0.5 * (lam @ (W @ lam))
+    if not E <= e_cap:
+        # beyond any small-strain state (contradictory contact rows: the finger cuts
+        # through the part): outside the model
+        return _no_solution(np.inf, 2)
+    grad, act = _force_and_keys(g, c, R, sel, lam, key)
+    return (E, status, grad, act, sel, lam, R[11][sel], R[9][sel], R[10][sel], R[12][sel], R[13][sel],
             R[5][sel], R[6][sel], R[7][sel], R[8][sel], R[2][sel])
 
 
@@ -694,22 +764,23 @@ def disc_axes(mesh: Any, fingers: Sequence[Finger]) -> np.ndarray:
     P = np.concatenate(rings)
     out = np.zeros((len(fingers), 2))
     for i, f in enumerate(fingers):
-        if not isinstance(f, DiscFinger):
+        rc = f.round_centre()
+        if rc is None:
             continue
-        c = np.asarray(f.center, float)
-        disc = shapely.Point(c).buffer(f.radius, quad_segs=64)
+        c, r = np.asarray(rc[0], float), rc[1]
+        disc = shapely.Point(c).buffer(r, quad_segs=64)
         inside = disc.intersection(poly)
         if inside.area > 1e-6 * disc.area:
             outside = disc.difference(poly)
             co = np.asarray(outside.centroid.coords[0]) if outside.area > 0 else c
             v = np.asarray(inside.centroid.coords[0]) - co
             nv = float(np.linalg.norm(v))
-            if nv > 1e-9 * f.radius:
+            if nv > 1e-9 * r:
                 out[i] = v / nv
                 continue
         rel = P - c
         d = np.linalg.norm(rel, axis=1)
-        band = d.min() + 0.25 * f.radius
+        band = d.min() + 0.25 * r
         w = np.clip(band - d, 0.0, None)
         v = (w[:, None] * rel / np.maximum(d, 1e-300)[:, None]).sum(axis=0)
         nv = float(np.linalg.norm(v))
@@ -718,32 +789,18 @@ def disc_axes(mesh: Any, fingers: Sequence[Finger]) -> np.ndarray:
 
 
 def _encode(fingers: Sequence[Finger], axes: np.ndarray):
+    """The fingers for the compiled kernels (:meth:`Finger.kernel_encoding`): kind codes,
+    parameters, and the polygon corners and normals stacked (``vstart`` indexes them)."""
     F = len(fingers)
     ftype = np.zeros(F, np.int64)
     fpar = np.zeros((F, 6))
     vstart = np.zeros(F + 1, np.int64)
     verts, vnorm = [], []
     for i, f in enumerate(fingers):
-        if isinstance(f, PointFinger):
-            ftype[i] = _POINT
-            fpar[i, :2] = f.at
-        elif isinstance(f, DiscFinger):
-            ftype[i] = _DISC
-            fpar[i, :3] = (*f.center, f.radius)
-            fpar[i, 3:5] = axes[i]
-            fpar[i, 5] = f.radius * np.sin(FLANK_ANGLE)
-        elif isinstance(f, HalfPlaneFinger):
-            ftype[i] = _HALFPLANE
-            fpar[i, :4] = (*f.point, *f.normal)
-        elif isinstance(f, PolygonFinger):
-            ftype[i] = _POLYGON
-            v = f.vertices
-            fpar[i, :2] = v.mean(axis=0)
-            verts.append(v)
-            vnorm.append(f.normals)
-        else:
-            raise TypeError(f"unknown finger {f!r}")
-        vstart[i + 1] = vstart[i] + (len(verts[-1]) if isinstance(f, PolygonFinger) else 0)
+        ftype[i], fpar[i], v, m = f.kernel_encoding(axes[i])
+        verts.append(v)
+        vnorm.append(m)
+        vstart[i + 1] = vstart[i] + len(v)
     verts = np.concatenate(verts) if verts else np.zeros((0, 2))
     vnorm = np.concatenate(vnorm) if vnorm else np.zeros((0, 2))
     return ftype, fpar, vstart, np.ascontiguousarray(verts, float), np.ascontiguousarray(vnorm, float)
@@ -787,7 +844,7 @@ class PlacementEnergy:
         self.fingers = tuple(fingers)
         self.solver = PadContact(mesh) if solver is None else solver
         self.centroid = np.asarray(self.solver.centroid if centroid is None else centroid, float)
-        self.tol = touch_tolerance(mesh) if tol is None else float(tol)
+        self.tol = resolve_tolerance(mesh, tol)
         self.diameter = float(mesh.diameter)
         self.inscribed_radius = inscribed_radius(mesh)
         self.depth_limit = float(max_depth_ratio) * self.inscribed_radius
@@ -816,7 +873,8 @@ class PlacementEnergy:
         self.disc_axes = (disc_axes(mesh, self.fingers) if disc_axes_ is None
                           else np.asarray(disc_axes_, float).reshape(len(self.fingers), 2))
         self._fing = _encode(self.fingers, self.disc_axes)
-        nc = sum(len(f.vertices) for f in self.fingers) + sum(isinstance(f, DiscFinger) for f in self.fingers)
+        # corners, and disc centres, each against every node and edge
+        nc = sum(len(f.vertices) for f in self.fingers) + sum(f.round_centre() is not None for f in self.fingers)
         n_body = sum(f.has_interior for f in self.fingers)
         self._cap = int(n_body * len(nodes) + nc * (len(nodes) + len(self._ea)) + 8)
         # convex hull of the part at rest (part frame), for the escape test
@@ -904,33 +962,7 @@ class PlacementEnergy:
         hn /= np.linalg.norm(hn, axis=1, keepdims=True)
         clear = np.ones(len(D), bool)
         for f in self.fingers:
-            if isinstance(f, HalfPlaneFinger):
-                n = np.asarray(f.normal)
-                ok = float(((H - np.asarray(f.point)) @ n).min()) >= -tol
-                clear &= ok & (D @ n >= -1e-12)
-                continue
-            if isinstance(f, PointFinger):
-                P = np.asarray(f.vertices, float)
-                pn = np.zeros((0, 2))
-            elif isinstance(f, DiscFinger):
-                k = 16
-                t = np.linspace(0, 2 * np.pi, k, endpoint=False)
-                P = np.asarray(f.center) + (f.radius / np.cos(np.pi / k)) * np.c_[np.cos(t), np.sin(t)]
-                pn = np.c_[np.cos(t + np.pi / k), np.sin(t + np.pi / k)]
-            else:
-                P = f.vertices
-                pn = f.normals
-            for j, d in enumerate(D):
-                if not clear[j]:
-                    continue
-                axes = np.vstack([hn, pn, [[-d[1], d[0]]]])
-                hp = H @ axes.T                       # (h, a)
-                lo, hi = hp.min(axis=0), hp.max(axis=0)
-                ad = axes @ d
-                hi = np.where(ad > 1e-12, np.inf, hi)
-                lo = np.where(ad < -1e-12, -np.inf, lo)
-                fp = P @ axes.T
-                flo, fhi = fp.min(axis=0), fp.max(axis=0)
-                if not np.any((fhi <= lo + tol) | (flo >= hi - tol)):
-                    clear[j] = False
+            idx = np.flatnonzero(clear)
+            if len(idx):
+                clear[idx] = f.translation_clear(H, hn, D[idx], tol)
         return bool(clear.any())

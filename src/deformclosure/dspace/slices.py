@@ -35,8 +35,8 @@ import numpy as np
 
 from ..errors import DeformClosureError
 from .energy import EnergyKind, _ElementModel, as_configurations
-from .fingers import Finger
-from .obstacles import _collides, _edge_terms, touch_tolerance
+from .fingers import Finger, as_fingers
+from .obstacles import _collides, _edge_terms, resolve_tolerance
 from .topology import DEFAULT_MIN_AREA_RATIO, _folded, _segments_meet, _signed_areas, loop_edges
 
 __all__ = ["SliceResult", "dfree_slice"]
@@ -128,27 +128,20 @@ class SliceResult:
 
 
 def _resolution(resolution: Any) -> tuple[int, int]:
-    r = np.atleast_1d(np.asarray(resolution))
+    try:
+        r = np.atleast_1d(np.asarray(resolution, dtype=float))
+    except (TypeError, ValueError):
+        r = np.zeros(0)
     if r.size == 1:
         r = np.repeat(r, 2)
-    if r.size != 2 or not np.all(r == np.round(r)) or np.any(r < 2):
+    if r.size != 2 or not np.all(np.isfinite(r)) or not np.all(r == np.round(r)) or np.any(r < 2):
         raise DeformClosureError(f"resolution = {resolution!r}: give an int >= 2 or (nx, ny)")
     return int(r[0]), int(r[1])
 
 
-def dfree_slice(
-    mesh: Any,
-    q: Any,
-    node: int,
-    fingers: Sequence[Finger],
-    extent: Sequence[float] | None = None,
-    resolution: int | tuple[int, int] = 200,
-    *,
-    energy: EnergyKind = "linear",
-    stiffness: Any = None,
-    tol: float | None = None,
-    min_area_ratio: float = DEFAULT_MIN_AREA_RATIO,
-) -> SliceResult:
+def dfree_slice(mesh: Any, q: Any, node: int, fingers: Sequence[Finger], extent: Sequence[float] | None = None,
+                resolution: int | tuple[int, int] = 200, *, energy: EnergyKind = "linear", stiffness: Any = None,
+                tol: float | None = None, min_area_ratio: float = DEFAULT_MIN_AREA_RATIO) -> SliceResult:
     """D_free membership and energy while one node moves and the others stay (paper Fig. 3).
 
     Parameters
@@ -160,29 +153,70 @@ def dfree_slice(
     node : int
         The moving node.
     fingers : sequence of Finger
+        Fixed fingers (m).
     extent : (xmin, xmax, ymin, ymax), optional
         Region swept by the node (m). Default: a square centred on the node's base
         position, half-width twice its longest incident edge.
     resolution : int or (nx, ny)
         Number of pixel centres per axis (the extent's edges are pixel centres).
     energy : {"linear", "corotational"}
-        Which energy the image shows.
+        Which energy the image shows (J).
     stiffness : sparse matrix, optional
         ``K`` (N/m) for the linear energy; assembled from the mesh when omitted.
     tol : float, optional
-        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter``.
+        Touching tolerance (m); default ``1e-9`` x ``mesh.diameter`` (SPEC §3).
     min_area_ratio : float
         ``D_T`` triangle-area threshold (see :func:`.topology.in_dt`).
 
     Returns
     -------
     SliceResult
+        Images ``(ny, nx)`` of ``D_free``, ``D_T``, each D-obstacle and the energy (J),
+        with the pixel coordinates (m).
 
     Raises
     ------
+    FingerError
+        ``fingers`` is not a sequence of fingers.
     DeformClosureError
-        Bad node id, extent or resolution.
+        Bad node id, extent, resolution, energy kind or ``tol``.
+
+    Examples
+    --------
+    The node at the middle of the base of a triangular part, a point finger 1 mm below
+    it; at its base position (the centre pixel) the node is free and the energy is zero:
+
+    >>> from deformclosure import Part, mesh_part
+    >>> from deformclosure.dspace import PointFinger, dfree_slice
+    >>> tri = Part.from_dict(dict(units="m", outer=[[0, 0], [0.04, 0], [0.02, 0.03]],
+    ...                           material=dict(youngs_modulus=5e6, poisson_ratio=0.3, elastic_limit_strain=0.4),
+    ...                           mesh=dict(max_area=4e-5, points=[[0.02, 0]])))
+    >>> mesh = mesh_part(tri)
+    >>> v = mesh.find_node([0.02, 0.0])
+    >>> res = dfree_slice(mesh, None, v, [PointFinger((0.02, -0.001))], resolution=21)
+    >>> res.free.shape, bool(res.free[10, 10]), float(res.energy[10, 10])
+    ((21, 21), True, 0.0)
     """
+    fingers = list(as_fingers(fingers))
+    x, v, ext, (nx, ny) = _slice_inputs(mesh, q, node, energy, extent, resolution)
+    xs = np.linspace(ext[0], ext[1], nx)
+    ys = np.linspace(ext[2], ext[3], ny)
+    tol = resolve_tolerance(mesh, tol)
+    topo = _SliceTopology(mesh, x, v, ext, min_area_ratio)
+    obst = _SliceObstacles(x, v, topo.edges, topo.moving, fingers, tol)
+    ener = _SliceEnergy(mesh, x, v, topo.inc, energy, stiffness)
+    free, in_dt, obstacles, U = _sweep(xs, ys, topo, obst, ener, len(fingers))
+    shape = (ny, nx)
+    return SliceResult(
+        node=v, xs=xs, ys=ys, free=free.reshape(shape), in_dt=in_dt.reshape(shape),
+        obstacles=obstacles.reshape((len(fingers),) + shape), energy=U.reshape(shape),
+        energy_kind=energy, q=x,
+    )
+
+
+def _slice_inputs(mesh: Any, q: Any, node: Any, energy: Any, extent: Any,
+                  resolution: Any) -> tuple[np.ndarray, int, np.ndarray, tuple[int, int]]:
+    """Validated base configuration ``(n, 2)``, node id, extent and resolution."""
     nodes0 = np.asarray(mesh.nodes, dtype=float)
     n = len(nodes0)
     x = nodes0.copy() if q is None else as_configurations(q, n)[0][0].copy()
@@ -191,13 +225,15 @@ def dfree_slice(
     v = int(node)
     if energy not in ("linear", "corotational"):
         raise DeformClosureError(f"energy = {energy!r}: use 'linear' or 'corotational'")
-    tri = np.asarray(mesh.triangles, dtype=np.int64)
-    inc = np.flatnonzero(np.any(tri == v, axis=1))
     if extent is None:
-        nb = np.unique(tri[inc])
+        tri = np.asarray(mesh.triangles, dtype=np.int64)
+        nb = np.unique(tri[np.any(tri == v, axis=1)])
         h = float(np.linalg.norm(x[nb] - x[v], axis=1).max())
         extent = (x[v, 0] - 2 * h, x[v, 0] + 2 * h, x[v, 1] - 2 * h, x[v, 1] + 2 * h)
-    ext = np.asarray(extent, dtype=float).ravel()
+    try:
+        ext = np.asarray(extent, dtype=float).ravel()
+    except (TypeError, ValueError):
+        ext = np.zeros(0)
     if ext.size != 4 or not np.all(np.isfinite(ext)) or ext[1] <= ext[0] or ext[3] <= ext[2]:
         raise DeformClosureError(f"extent = {extent!r}: give (xmin, xmax, ymin, ymax) with xmin < xmax, ymin < ymax")
     nx, ny = _resolution(resolution)
@@ -206,122 +242,161 @@ def dfree_slice(
     if nx * ny > MAX_SLICE_RESOLUTION**2:
         raise DeformClosureError(f"resolution = {resolution!r}: {nx} x {ny} pixels, more than "
                                  f"{MAX_SLICE_RESOLUTION} x {MAX_SLICE_RESOLUTION}; lower it")
-    xs = np.linspace(ext[0], ext[1], nx)
-    ys = np.linspace(ext[2], ext[3], ny)
-    P = nx * ny
-    tol = touch_tolerance(mesh) if tol is None else float(tol)
-    fingers = list(fingers)
+    return x, v, ext, (nx, ny)
 
-    # --- D_T: triangles (what does not depend on the moving node, once)
-    rest_area = _signed_areas(nodes0[None], tri)[0]
-    areas_fixed = _signed_areas(x[None], tri)[0]
-    fixed_tri = np.ones(len(tri), bool)
-    fixed_tri[inc] = False
-    ok_fixed = bool(np.all(areas_fixed[fixed_tri] > min_area_ratio * rest_area[fixed_tri]))
-    kk, jj = np.nonzero(tri[inc] == v)
 
-    # --- D_T: boundary rings. Fixed edges against each other once (candidate pairs from an
-    # R-tree of their bounding boxes: no E² table), the moving edges per pixel.
-    edges = loop_edges(mesh.loops)
-    moving = np.flatnonzero(np.any(edges == v, axis=1))
-    adj = _adjacent_triples(edges)
-    is_mov = np.zeros(len(edges), bool)
-    is_mov[moving] = True
-    fixed_edges = np.flatnonzero(~is_mov)
-    ok_rings = not _fixed_ring_problems(x, edges, fixed_edges, adj[~np.any(adj == v, axis=1)])
-    fold_triples = adj[np.any(adj == v, axis=1)] if len(moving) else adj[:0]
-    # moving edges against the non-adjacent fixed edges, pruned by the grid's bounding box
-    lo_g = np.array([ext[0], ext[2]])
-    hi_g = np.array([ext[1], ext[3]])
-    meet_tests = []
-    for e in moving:
-        other = int(edges[e, 0] if edges[e, 1] == v else edges[e, 1])
-        cand = np.flatnonzero(~is_mov & ~np.any(np.isin(edges, edges[e]), axis=1))
-        lo = np.minimum(lo_g, x[other])
-        hi = np.maximum(hi_g, x[other])
-        ea, eb = x[edges[cand, 0]], x[edges[cand, 1]]
-        box = np.all((np.minimum(ea, eb) <= hi) & (np.maximum(ea, eb) >= lo), axis=1)
-        cand = cand[box]
-        if len(cand):
-            meet_tests.append((other, x[edges[cand, 0]][None], x[edges[cand, 1]][None]))
+class _SliceTopology:
+    """``D_T`` of the slice: what does not depend on the moving node ``v`` once, the rest
+    per pixel (:meth:`in_dt`). Fixed boundary edges are tested against each other once
+    (candidate pairs from an R-tree of their bounding boxes: no E² table), the moving
+    edges per pixel against the non-adjacent fixed edges, pruned by the grid's box."""
 
-    # --- D-obstacles: the fixed edges' terms once per finger
-    if len(moving) == 0:
-        a, b = x[edges[:, 0]], x[edges[:, 1]]
-        static = np.array([bool(_collides(f, _edge_terms(f, a[None], b[None], tol), tol)[0])
-                           for f in fingers], dtype=bool)
-        t_fixed = []
-    else:
-        fa_, fb_ = x[edges[fixed_edges, 0]][None], x[edges[fixed_edges, 1]][None]
-        t_fixed = [_edge_terms(f, fa_, fb_, tol) for f in fingers]
+    def __init__(self, mesh: Any, x: np.ndarray, v: int, ext: np.ndarray, min_area_ratio: float):
+        nodes0 = np.asarray(mesh.nodes, dtype=float)
+        self.x, self.v, self.min_area_ratio = x, v, min_area_ratio
+        self.tri = tri = np.asarray(mesh.triangles, dtype=np.int64)
+        self.inc = inc = np.flatnonzero(np.any(tri == v, axis=1))
+        # triangles
+        self.rest_area = _signed_areas(nodes0[None], tri)[0]
+        areas_fixed = _signed_areas(x[None], tri)[0]
+        fixed_tri = np.ones(len(tri), bool)
+        fixed_tri[inc] = False
+        self.ok_fixed = bool(np.all(areas_fixed[fixed_tri] > min_area_ratio * self.rest_area[fixed_tri]))
+        self.kk, self.jj = np.nonzero(tri[inc] == v)
+        # boundary rings
+        self.edges = edges = loop_edges(mesh.loops)
+        self.moving = moving = np.flatnonzero(np.any(edges == v, axis=1))
+        adj = _adjacent_triples(edges)
+        is_mov = np.zeros(len(edges), bool)
+        is_mov[moving] = True
+        self.ok_rings = not _fixed_ring_problems(x, edges, np.flatnonzero(~is_mov), adj[~np.any(adj == v, axis=1)])
+        self.fold_triples = adj[np.any(adj == v, axis=1)] if len(moving) else adj[:0]
+        self.meet_tests = self._meet_tests(is_mov, np.array([ext[0], ext[2]]), np.array([ext[1], ext[3]]))
 
-    # --- energy: what does not depend on the moving node
-    if energy == "linear":
-        if stiffness is None:
-            from ..elasticity.stiffness import stiffness_matrix
+    def _meet_tests(self, is_mov: np.ndarray, lo_g: np.ndarray, hi_g: np.ndarray) -> list:
+        """Per moving edge: its fixed end and the fixed edges its sweep may meet."""
+        x, edges, v = self.x, self.edges, self.v
+        out = []
+        for e in self.moving:
+            other = int(edges[e, 0] if edges[e, 1] == v else edges[e, 1])
+            cand = np.flatnonzero(~is_mov & ~np.any(np.isin(edges, edges[e]), axis=1))
+            lo = np.minimum(lo_g, x[other])
+            hi = np.maximum(hi_g, x[other])
+            ea, eb = x[edges[cand, 0]], x[edges[cand, 1]]
+            box = np.all((np.minimum(ea, eb) <= hi) & (np.maximum(ea, eb) >= lo), axis=1)
+            cand = cand[box]
+            if len(cand):
+                out.append((other, x[edges[cand, 0]][None], x[edges[cand, 1]][None]))
+        return out
 
-            stiffness = stiffness_matrix(mesh)
-        X = (x - nodes0).ravel()
-        KX = stiffness @ X
-        U0 = 0.5 * float(X @ KX)
-        dofs = [2 * v, 2 * v + 1]
-        Kvv = stiffness[dofs][:, dofs].toarray()
-    else:
-        model = _ElementModel(mesh)
-        e_all = model.energies(x[None], "corotational")[0]
-        base = float(e_all[fixed_tri].sum())
-
-    # --- per pixel, in blocks of rows: the working arrays stay small at any resolution
-    free = np.empty(P, bool)
-    in_dt = np.empty(P, bool)
-    obstacles = np.zeros((len(fingers), P), dtype=bool)
-    U = np.empty(P)
-    n_cand = sum(t[1].shape[1] for t in meet_tests)
-    per_px = 8 * (12 * len(inc) + 20 * n_cand + 16 * len(moving) + 32)
-    rows = max(1, min(ny, int(_SLICE_BLOCK_BYTES // max(per_px * nx, 1))))
-    for r0 in range(0, ny, rows):
-        gy = ys[r0:r0 + rows]
-        G = np.stack(np.meshgrid(xs, gy), axis=-1).reshape(-1, 2)   # row-major in y
-        sl = slice(r0 * nx, r0 * nx + len(G))
-        pts = np.broadcast_to(x[tri[inc]], (len(G), len(inc), 3, 2)).copy()
-        pts[:, kk, jj, :] = G[:, None, :]
+    def in_dt(self, G: np.ndarray) -> np.ndarray:
+        """``D_T`` membership with the moving node at each of the positions ``G (P, 2)``."""
+        x, v, inc = self.x, self.v, self.inc
+        pts = np.broadcast_to(x[self.tri[inc]], (len(G), len(inc), 3, 2)).copy()
+        pts[:, self.kk, self.jj, :] = G[:, None, :]
         d1 = pts[..., 1, :] - pts[..., 0, :]
         d2 = pts[..., 2, :] - pts[..., 0, :]
         ar = 0.5 * (d1[..., 0] * d2[..., 1] - d1[..., 1] * d2[..., 0])
         del pts, d1, d2
-        ok = np.all(ar > min_area_ratio * rest_area[inc], axis=1) & ok_fixed & ok_rings
-        for a_, b_, c_ in fold_triples:
+        ok = np.all(ar > self.min_area_ratio * self.rest_area[inc], axis=1) & self.ok_fixed & self.ok_rings
+        for a_, b_, c_ in self.fold_triples:
             pa = G if a_ == v else np.broadcast_to(x[a_], G.shape)
             pb = G if b_ == v else np.broadcast_to(x[b_], G.shape)
             pc = G if c_ == v else np.broadcast_to(x[c_], G.shape)
             ok &= ~_folded(pa, pb, pc)
-        for other, ca, cb in meet_tests:
+        for other, ca, cb in self.meet_tests:
             oa = np.broadcast_to(x[other], G.shape)[:, None, :]
             ok &= ~_segments_meet(G[:, None, :], oa, ca, cb).any(axis=1)
-        in_dt[sl] = ok
+        return ok
+
+
+class _SliceObstacles:
+    """D-obstacle membership of the slice: the fixed boundary edges' terms once per
+    finger, the (at most two) moving edges' per pixel (:meth:`masks`)."""
+
+    def __init__(self, x: np.ndarray, v: int, edges: np.ndarray, moving: np.ndarray, fingers: list[Finger],
+                 tol: float):
+        self.x, self.v, self.edges, self.moving, self.fingers, self.tol = x, v, edges, moving, fingers, tol
         if len(moving) == 0:
-            obstacles[:, sl] = static[:, None]
+            a, b = x[edges[:, 0]], x[edges[:, 1]]
+            self.static = np.array([bool(_collides(_edge_terms(f, a[None], b[None], tol), tol)[0])
+                                    for f in fingers], dtype=bool)
+            self.t_fixed: list = []
         else:
-            ma = np.empty((len(G), len(moving), 2))
-            mb = np.empty((len(G), len(moving), 2))
-            for j, e in enumerate(moving):
-                ma[:, j] = G if edges[e, 0] == v else x[edges[e, 0]]
-                mb[:, j] = G if edges[e, 1] == v else x[edges[e, 1]]
-            for i, f in enumerate(fingers):
-                obstacles[i, sl] = _collides(f, _edge_terms(f, ma, mb, tol).combine(t_fixed[i]), tol)
+            fixed = np.setdiff1d(np.arange(len(edges)), moving)
+            fa_, fb_ = x[edges[fixed, 0]][None], x[edges[fixed, 1]][None]
+            self.t_fixed = [_edge_terms(f, fa_, fb_, tol) for f in fingers]
+
+    def masks(self, G: np.ndarray) -> np.ndarray:
+        """Membership ``(n_fingers, P)`` in each D-obstacle for the positions ``G (P, 2)``."""
+        if len(self.moving) == 0:
+            return np.broadcast_to(self.static[:, None], (len(self.fingers), len(G)))
+        x, v, edges = self.x, self.v, self.edges
+        ma = np.empty((len(G), len(self.moving), 2))
+        mb = np.empty((len(G), len(self.moving), 2))
+        for j, e in enumerate(self.moving):
+            ma[:, j] = G if edges[e, 0] == v else x[edges[e, 0]]
+            mb[:, j] = G if edges[e, 1] == v else x[edges[e, 1]]
+        out = np.zeros((len(self.fingers), len(G)), dtype=bool)
+        for i, f in enumerate(self.fingers):
+            out[i] = _collides(_edge_terms(f, ma, mb, self.tol).combine(self.t_fixed[i]), self.tol)
+        return out
+
+
+class _SliceEnergy:
+    """The slice's energy (J): the linear one as the exact quadratic in the node's move,
+    the corotational one as the fixed elements' sum plus the incident elements'."""
+
+    def __init__(self, mesh: Any, x: np.ndarray, v: int, inc: np.ndarray, kind: str, stiffness: Any):
+        self.x, self.v, self.inc, self.kind = x, v, inc, kind
+        if kind == "linear":
+            if stiffness is None:
+                from ..elasticity.stiffness import stiffness_matrix
+
+                stiffness = stiffness_matrix(mesh)
+            X = (x - np.asarray(mesh.nodes, dtype=float)).ravel()
+            self.KX = stiffness @ X
+            self.U0 = 0.5 * float(X @ self.KX)
+            self.dofs = [2 * v, 2 * v + 1]
+            self.Kvv = stiffness[self.dofs][:, self.dofs].toarray()
+        else:
+            self.model = _ElementModel(mesh)
+            e_all = self.model.energies(x[None], "corotational")[0]
+            fixed_tri = np.ones(len(e_all), bool)
+            fixed_tri[inc] = False
+            self.base = float(e_all[fixed_tri].sum())
+
+    def values(self, G: np.ndarray) -> np.ndarray:
+        """Energy (J) with the moving node at each of the positions ``G (P, 2)``."""
+        if self.kind == "linear":
+            d = G - self.x[self.v]
+            return self.U0 + d @ self.KX[self.dofs] + 0.5 * np.einsum("pi,ij,pj->p", d, self.Kvv, d)
+        # only the incident triangles' node positions matter: build them directly
+        return self.base + _incident_energies(self.model, self.x, self.v, self.inc, G).sum(axis=1)
+
+
+def _sweep(xs: np.ndarray, ys: np.ndarray, topo: _SliceTopology, obst: _SliceObstacles, ener: _SliceEnergy,
+           n_fingers: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The images (flat, row-major in y) computed in blocks of rows: the working arrays
+    stay small at any resolution."""
+    nx, ny = len(xs), len(ys)
+    P = nx * ny
+    free = np.empty(P, bool)
+    in_dt = np.empty(P, bool)
+    obstacles = np.zeros((n_fingers, P), dtype=bool)
+    U = np.empty(P)
+    n_cand = sum(t[1].shape[1] for t in topo.meet_tests)
+    per_px = 8 * (12 * len(topo.inc) + 20 * n_cand + 16 * len(topo.moving) + 32)
+    rows = max(1, min(ny, int(_SLICE_BLOCK_BYTES // max(per_px * nx, 1))))
+    for r0 in range(0, ny, rows):
+        G = np.stack(np.meshgrid(xs, ys[r0:r0 + rows]), axis=-1).reshape(-1, 2)   # row-major in y
+        sl = slice(r0 * nx, r0 * nx + len(G))
+        ok = topo.in_dt(G)
+        in_dt[sl] = ok
+        obstacles[:, sl] = obst.masks(G)
         free[sl] = ok & ~np.any(obstacles[:, sl], axis=0)
-        if energy == "linear":
-            d = G - x[v]
-            U[sl] = U0 + d @ KX[dofs] + 0.5 * np.einsum("pi,ij,pj->p", d, Kvv, d)
-        else:
-            # only the incident triangles' node positions matter: build them directly
-            U[sl] = base + _incident_energies(model, x, v, inc, G).sum(axis=1)
-    shape = (ny, nx)
-    return SliceResult(
-        node=v, xs=xs, ys=ys, free=free.reshape(shape), in_dt=in_dt.reshape(shape),
-        obstacles=obstacles.reshape((len(fingers),) + shape), energy=U.reshape(shape),
-        energy_kind=energy, q=x,
-    )
+        U[sl] = ener.values(G)
+    return free, in_dt, obstacles, U
 
 
 #: Working memory of one block of slice pixels (bytes): the slice is computed in blocks of

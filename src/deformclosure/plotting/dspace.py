@@ -23,32 +23,11 @@ def _axes(ax: Any) -> Any:
     return ax
 
 
-def _finger_patch(f: Any, s: float, bounds: tuple[float, float, float, float], **kw: Any) -> Any:
-    from matplotlib.patches import Circle, Polygon
-
-    from ..dspace.fingers import DiscFinger, HalfPlaneFinger, PointFinger, PolygonFinger
-
-    if isinstance(f, DiscFinger):
-        return Circle(np.asarray(f.center) / s, f.radius / s, **kw)
-    if isinstance(f, PolygonFinger):
-        return Polygon(f.vertices / s, closed=True, **kw)
-    if isinstance(f, HalfPlaneFinger):
-        x0, x1, y0, y1 = bounds
-        big = 4.0 * max(x1 - x0, y1 - y0)
-        p = np.asarray(f.point) / s
-        n = np.asarray(f.normal)
-        t = np.array([-n[1], n[0]])
-        quad = np.array([p + big * t, p - big * t, p - big * t - big * n, p + big * t - big * n])
-        return Polygon(quad, closed=True, **kw)
-    if isinstance(f, PointFinger):
-        return None
-    raise TypeError(f"unknown finger {f!r}")
-
-
 def plot_fingers(fingers: Sequence[Any], ax: Any = None, units: str = "m",
                  bounds: tuple[float, float, float, float] | None = None, labels: bool = True,
                  color: str = "0.35") -> Any:
-    """Draw finger bodies (points as crosses, half-planes clipped to ``bounds``).
+    """Draw finger bodies (points as crosses, half-planes clipped to ``bounds``); each
+    finger draws itself (:meth:`deformclosure.dspace.fingers.Finger.plot`).
 
     Parameters
     ----------
@@ -69,17 +48,23 @@ def plot_fingers(fingers: Sequence[Any], ax: Any = None, units: str = "m",
         y0, y1 = ax.get_ylim()
         bounds = (x0, x1, y0, y1)
     for i, f in enumerate(fingers):
-        patch = _finger_patch(f, s, bounds, facecolor=color, edgecolor="k", alpha=0.45, lw=0.8, zorder=3)
-        if patch is None:
-            p = np.asarray(f.at) / s
-            ax.plot(*p, marker="x", color="k", ms=8, mew=2, zorder=5)
-            anchor = p
-        else:
-            ax.add_patch(patch)
-            anchor = f.probe_point() / s if f.probe_point() is not None else np.asarray(f.point) / s
+        anchor = f.plot(ax, scale=s, bounds=bounds, facecolor=color, edgecolor="k", alpha=0.45, lw=0.8, zorder=3)
         if labels:
             ax.annotate(f"F{i}", anchor, textcoords="offset points", xytext=(4, 4), fontsize=8, zorder=6)
     return ax.figure
+
+
+def fingers_in_frame(ax: Any, fingers: Sequence[Any], units: str, bounds: Sequence[float], xlabel: str,
+                     ylabel: str) -> None:
+    """Draw ``fingers`` clipped to ``bounds`` (in ``units``), show exactly ``bounds`` at
+    equal aspect and label the axes."""
+    if len(fingers):
+        plot_fingers(fingers, ax=ax, units=units, bounds=bounds)
+    ax.set_xlim(bounds[0], bounds[1])
+    ax.set_ylim(bounds[2], bounds[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
 
 
 def _outline(ax: Any, mesh: Any, x: np.ndarray, s: float, **kw: Any) -> None:
@@ -168,13 +153,8 @@ def plot_slice(result: Any, mesh: Any = None, fingers: Sequence[Any] = (), ax: A
         ax.triplot(x[:, 0] / s, x[:, 1] / s, tri, color="0.5", lw=0.3, zorder=1)
         _outline(ax, mesh, x, s, color="k", lw=1.0)
         ax.plot(x[v, 0] / s, x[v, 1] / s, "o", color="tab:orange", ms=5, zorder=6, label=f"node {v} (base)")
-    if fingers:
-        plot_fingers(fingers, ax=ax, units=units, bounds=ext)
-    ax.set_xlim(ext[0], ext[1])
-    ax.set_ylim(ext[2], ext[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"x of node {result.node} ({units})")
-    ax.set_ylabel(f"y of node {result.node} ({units})")
+    fingers_in_frame(ax, fingers, units, ext, f"x of node {result.node} ({units})",
+                     f"y of node {result.node} ({units})")
     ax.set_title(f"D-space slice: D_free (light), D-obstacles (red), not D_T (grey); {result.energy_kind} U (J)",
                  fontsize=8)
     return ax.figure

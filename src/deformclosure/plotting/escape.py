@@ -44,7 +44,7 @@ def plot_escape_path(mesh: Any, rel: Any, fingers: Sequence[Any], ax: Any = None
     n_outlines : int
         Outlines drawn along the path (plus the equilibrium, the saddle and the end).
     """
-    from .dspace import _axes, plot_fingers
+    from .dspace import _axes, fingers_in_frame
 
     ax = _axes(ax)
     s = length_scale(units)
@@ -73,12 +73,7 @@ def plot_escape_path(mesh: Any, rel: Any, fingers: Sequence[Any], ax: Any = None
     lo, hi = allp.min(axis=0), allp.max(axis=0)
     pad = 0.1 * float(np.max(hi - lo))
     bounds = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
-    plot_fingers(fingers, ax=ax, units=units, bounds=bounds)
-    ax.set_xlim(bounds[0], bounds[1])
-    ax.set_ylim(bounds[2], bounds[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel(f"x ({units})")
-    ax.set_ylabel(f"y ({units})")
+    fingers_in_frame(ax, fingers, units, bounds, f"x ({units})", f"y ({units})")
     end = {"released": "released", "equilibrium": "another equilibrium"}.get(rel.target, "no release")
     ax.set_title(f"escape path ({len(P)} placements, to {end}); saddle in red", fontsize=9)
     return ax.figure

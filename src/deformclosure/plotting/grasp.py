@@ -6,8 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..units import length_scale
-from .mesh import new_figure, plot_mesh, save_figure
+from .mesh import figure_axes, plot_mesh, save_plots
 
 __all__ = ["plot_quality_curve", "plot_deformed_grasp", "plot_energy_landscape",
            "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots",
@@ -29,32 +28,40 @@ def plot_quality_curve(analysis, ax=None, units: str = "mm"):
     matplotlib.figure.Figure
         The figure holding ``ax`` (compose it with others, or save it).
     """
-    if ax is None:
-        _, ax = new_figure((7, 4.5))
-    s = 1.0 / length_scale(units)
+    ax, s = figure_axes(ax, (7, 4.5), units)
     c = analysis.separation.curve
     sig = np.asarray(c["sigma"], float) * s
     conv = lambda v: np.array([np.nan if x is None else x for x in v], float) * 1e3  # noqa: E731
     UA, UL, Q = conv(c["U_A"]), conv(c["U_L"]), conv(c["Q"])
     order = np.argsort(sig, kind="stable")
-    ax.plot(sig[order], Q[order], label="$Q = \\min(U_A, U_L)$", color="0.6", lw=5, alpha=0.6)
-    ax.plot(sig[order], UA[order], label="$U_A$ (release energy)", color="C0", lw=1.2)
-    ax.plot(sig[order], UL[order], label="$U_L$ (to elastic limit)", color="C1", lw=1.2)
+    quality_lines(ax, sig[order], Q[order], UA[order], UL[order])
     finite = np.isfinite(UA)
     if finite.any() and np.nanmax(UA[finite]) < 0.2 * np.nanmax(UL):
         ax.set_yscale("symlog", linthresh=max(np.nanmax(UA[finite]) / 10, 1e-12))
     sep = analysis.separation
-    if sep.sigma_star is not None:
-        ax.axvline(sep.sigma_star * s, color="C3", ls="--", lw=1)
-        ax.plot([sep.sigma_star * s], [sep.quality * 1e3], "o", color="C3",
-                label=f"$\\sigma^*$ = {sep.sigma_star * s:.4g} {units}")
-    ax.axvline(analysis.limit.sigma_L * s, color="C1", ls=":", lw=1,
-               label=f"$\\sigma_L$ = {analysis.limit.sigma_L * s:.4g} {units}")
+    sigma_marks(ax, sep.sigma_star, sep.quality, analysis.limit.sigma_L, s, units)
     ax.set_xlabel(f"jaw separation σ ({units})")
     ax.set_ylabel("energy (mJ)")
     ax.set_title(f"jaws at nodes {analysis.jaws[0]}, {analysis.jaws[1]} ({sep.method})")
     ax.legend(fontsize=8)
     return ax.figure
+
+
+def quality_lines(ax, sig: np.ndarray, Q: np.ndarray, UA: np.ndarray, UL: np.ndarray) -> None:
+    """``Q`` (wide grey), ``U_A`` and ``U_L`` against σ (plot units, mJ)."""
+    ax.plot(sig, Q, label="$Q = \\min(U_A, U_L)$", color="0.6", lw=5, alpha=0.6)
+    ax.plot(sig, UA, label="$U_A$ (release energy)", color="C0", lw=1.2)
+    ax.plot(sig, UL, label="$U_L$ (to elastic limit)", color="C1", lw=1.2)
+
+
+def sigma_marks(ax, sigma_star: float | None, quality: float, sigma_L: float, s: float, units: str) -> None:
+    """The optimal separation σ* with its quality (when there is one) and the elastic
+    limit σ_L, as vertical lines (``s`` plot units per metre)."""
+    if sigma_star is not None:
+        ax.axvline(sigma_star * s, color="C3", ls="--", lw=1)
+        ax.plot([sigma_star * s], [quality * 1e3], "o", color="C3",
+                label=f"$\\sigma^*$ = {sigma_star * s:.4g} {units}")
+    ax.axvline(sigma_L * s, color="C1", ls=":", lw=1, label=f"$\\sigma_L$ = {sigma_L * s:.4g} {units}")
 
 
 def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
@@ -63,8 +70,7 @@ def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
     The linear displacement field for the jaw distance change ``σ0 − σ*`` is drawn to
     scale (it is exact for the linear model; large squeezes are only indicative).
     """
-    if ax is None:
-        _, ax = new_figure((6, 6))
+    ax, s = figure_axes(ax, (6, 6), units)
     mesh = analysis.model.mesh
     sep = analysis.separation
     sigma = sep.sigma_star if sep.sigma_star is not None else analysis.limit.sigma0
@@ -76,7 +82,6 @@ def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
     strain = lim.strain_per_length * delta
     plot_mesh(mesh, ax=ax, units=units, values=strain, displacement=u, cmap="magma",
               colorbar_label="strain magnitude")
-    s = 1.0 / length_scale(units)
     xy = (mesh.nodes + u.reshape(-1, 2))[list(analysis.jaws)] * s
     ax.plot(xy[:, 0], xy[:, 1], "v", color="C2", markersize=11, markeredgecolor="k",
             label="jaws")
@@ -93,24 +98,15 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
 
     Start, saddle and the minimax escape path at σ* are marked.
     """
-    if ax is None:
-        _, ax = new_figure((6, 5.5))
+    ax, s = figure_axes(ax, (6, 5.5), units)
     model = analysis.model
     mesh = model.mesh
     sep = analysis.separation
     if sigma is None:
         sigma = sep.sigma_star if sep.sigma_star is not None else analysis.limit.sigma0
-    s = 1.0 / length_scale(units)
-    nodes_on = np.concatenate([mesh.loops[i] for i in
-                               ((0,) if model.mode == "contracting" else range(len(mesh.loops)))])
-    # Arclength coordinate along the concatenated loops.
-    arc = np.zeros(mesh.n_nodes)
-    off = 0.0
-    for i in ((0,) if model.mode == "contracting" else range(len(mesh.loops))):
-        lp = mesh.loops[i]
-        seg = np.linalg.norm(np.diff(mesh.nodes[np.append(lp, lp[0])], axis=0), axis=1)
-        arc[lp] = off + np.concatenate([[0.0], np.cumsum(seg[:-1])])
-        off += seg.sum()
+    loop_ids = (0,) if model.mode == "contracting" else range(len(mesh.loops))
+    nodes_on = np.concatenate([mesh.loops[i] for i in loop_ids])
+    arc, off = _arclength(mesh, loop_ids, fill=0.0)   # along the concatenated loops
     U = model.energies(sigma)
     pairs = model.graph.pairs
     order = np.argsort(arc[nodes_on])
@@ -145,21 +141,15 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
 
 def save_grasp_plots(analysis, out_dir: str | Path, units: str = "mm") -> list[Path]:
     """Write ``quality.png``, ``deformed.png`` and ``landscape.png`` into ``out_dir``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, fn, size in (("quality.png", plot_quality_curve, (7, 4.5)),
-                           ("deformed.png", plot_deformed_grasp, (6, 6)),
-                           ("landscape.png", plot_energy_landscape, (6.5, 5.5))):
-        fig, ax = new_figure(size)
-        fn(analysis, ax=ax, units=units)
-        save_figure(fig, out / name)
-        paths.append(out / name)
-    return paths
+    return save_plots(analysis, out_dir, units, (("quality.png", plot_quality_curve, (7, 4.5)),
+                                                 ("deformed.png", plot_deformed_grasp, (6, 6)),
+                                                 ("landscape.png", plot_energy_landscape, (6.5, 5.5))))
 
 
-def _arclength(mesh, loop_ids) -> tuple[np.ndarray, float]:
-    arc = np.full(mesh.n_nodes, np.nan)
+def _arclength(mesh, loop_ids, fill: float = np.nan) -> tuple[np.ndarray, float]:
+    """Arclength (m) of every node along the loops ``loop_ids`` one after the other
+    (``fill`` elsewhere), and their total length."""
+    arc = np.full(mesh.n_nodes, fill)
     off = 0.0
     for i in loop_ids:
         lp = mesh.loops[i]
@@ -221,8 +211,7 @@ def plot_quality_map(plan, ax=None, units: str = "mm"):
     from matplotlib.colors import LogNorm
     from matplotlib.patches import Patch
 
-    if ax is None:
-        _, ax = new_figure((6.5, 6.5))
+    ax, s = figure_axes(ax, (6.5, 6.5), units)
     mesh = plan.model.mesh
     loops = (0,) if plan.mode == "contracting" else range(len(mesh.loops))
     arc, total = _arclength(mesh, loops)
@@ -233,7 +222,6 @@ def plot_quality_map(plan, ax=None, units: str = "mm"):
     ia, ib = pos[plan.pairs[:, 0]], pos[plan.pairs[:, 1]]
     M = np.full((len(ids), len(ids)), np.nan)
     M[ia, ib] = M[ib, ia] = plan.quality * 1e3
-    s = 1.0 / length_scale(units)
     edges = np.append(arc[ids], total) * s
     rng = quality_color_range(plan.quality)
     import matplotlib
@@ -282,11 +270,9 @@ def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
     Pairs flagged ``pulls`` are drawn dashed and labelled (they are proposed only when
     the plan allows pulling). The legend sits to the right of the axes, off the part.
     """
-    if ax is None:
-        _, ax = new_figure((8, 6))
+    ax, s = figure_axes(ax, (8, 6), units)
     mesh = plan.model.mesh
     plot_mesh(mesh, ax=ax, units=units)
-    s = 1.0 / length_scale(units)
     shown = _shown_pairs(plan, n)
     for r, (a, b, q, pulls) in enumerate(shown):
         xy = mesh.nodes[[a, b]] * s
@@ -305,13 +291,5 @@ def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
 
 def save_plan_plots(plan, out_dir: str | Path, units: str = "mm") -> list[Path]:
     """Write ``quality_map.png`` and ``top_grasps.png`` into ``out_dir``."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, fn, size in (("quality_map.png", plot_quality_map, (6.5, 6.5)),
-                           ("top_grasps.png", plot_top_grasps, (8, 6))):
-        fig, ax = new_figure(size)
-        fn(plan, ax=ax, units=units)
-        save_figure(fig, out / name)
-        paths.append(out / name)
-    return paths
+    return save_plots(plan, out_dir, units, (("quality_map.png", plot_quality_map, (6.5, 6.5)),
+                                             ("top_grasps.png", plot_top_grasps, (8, 6))))

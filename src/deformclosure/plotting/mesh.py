@@ -8,7 +8,7 @@ import numpy as np
 
 from ..units import length_scale
 
-__all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure"]
+__all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure", "figure_axes", "save_plots"]
 
 
 def new_figure(figsize=(6, 6)):
@@ -19,6 +19,28 @@ def new_figure(figsize=(6, 6)):
     import matplotlib.pyplot as plt
 
     return plt.subplots(figsize=figsize)
+
+
+def figure_axes(ax, figsize, units: str):
+    """``ax``, or the axes of a new figure of ``figsize`` when ``None``, and the scale
+    (plot units per metre) of ``units``."""
+    if ax is None:
+        _, ax = new_figure(figsize)
+    return ax, 1.0 / length_scale(units)
+
+
+def save_plots(obj, out_dir: str | Path, units: str, specs) -> list[Path]:
+    """Draw ``fn(obj, ax=ax, units=units)`` on a new figure of ``size`` and save it as
+    ``out_dir / name`` for every ``(name, fn, size)`` of ``specs``; return the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, fn, size in specs:
+        fig, ax = new_figure(size)
+        fn(obj, ax=ax, units=units)
+        save_figure(fig, out / name)
+        paths.append(out / name)
+    return paths
 
 
 def save_figure(fig, path: str | Path) -> None:

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from ..units import length_scale
-from .mesh import new_figure, save_figure
+from .grasp import quality_lines, sigma_marks
+from .mesh import figure_axes, save_plots
 
 __all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots"]
 
@@ -27,35 +28,27 @@ def _outline(ax, mesh, s: float) -> None:
 
 
 def plot_pad_quality(result, ax=None, units: str = "mm"):
-    """``U``, ``U_A``, ``U_L`` and ``Q`` (mJ) against the pad separation σ.
+    """``U``, ``U_A``, ``U_L`` and ``Q`` (mJ) against the pad separation σ: the picture of
+    :func:`deformclosure.plotting.grasp.plot_quality_curve` with the grasp energy ``U``.
 
     Parameters
     ----------
     result : PadGraspResult
     ax : matplotlib Axes, optional
     units : str
-        Length unit of the σ axis.
+        Length unit of σ; energies are drawn in mJ.
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure holding ``ax`` (compose it with others, or save it).
+        ``ax.figure``, to compose with others or save.
     """
-    if ax is None:
-        _, ax = new_figure((7, 4.5))
-    s = 1.0 / length_scale(units)
+    ax, s = figure_axes(ax, (7, 4.5), units)
     c = result.curve
     sig = _nan(c["sigma"]) * s
-    ax.plot(sig, _nan(c["Q"]) * 1e3, color="0.6", lw=5, alpha=0.6, label="$Q = \\min(U_A, U_L)$")
-    ax.plot(sig, _nan(c["U_A"]) * 1e3, color="C0", lw=1.2, label="$U_A$ (release energy)")
-    ax.plot(sig, _nan(c["U_L"]) * 1e3, color="C1", lw=1.2, label="$U_L$ (to elastic limit)")
+    quality_lines(ax, sig, _nan(c["Q"]) * 1e3, _nan(c["U_A"]) * 1e3, _nan(c["U_L"]) * 1e3)
     ax.plot(sig, _nan(c["U"]) * 1e3, color="k", lw=0.8, ls="--", label="$U$ (grasp energy)")
-    if result.sigma_star is not None:
-        ax.axvline(result.sigma_star * s, color="C3", ls="--", lw=1)
-        ax.plot([result.sigma_star * s], [result.quality * 1e3], "o", color="C3",
-                label=f"$\\sigma^*$ = {result.sigma_star * s:.4g} {units}")
-    ax.axvline(result.sigma_L * s, color="C1", ls=":", lw=1,
-               label=f"$\\sigma_L$ = {result.sigma_L * s:.4g} {units}")
+    sigma_marks(ax, result.sigma_star, result.quality, result.sigma_L, s, units)
     ax.set_xlabel(f"pad separation σ ({units})")
     ax.set_ylabel("energy (mJ)")
     ax.set_title(f"pads W = {result.pad.width * s:.3g}, ρ = {result.pad.radius * s:.3g} {units}: "
@@ -113,9 +106,7 @@ def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
     matplotlib.figure.Figure
         The figure holding ``ax`` (compose it with others, or save it).
     """
-    if ax is None:
-        _, ax = new_figure((6, 6))
-    s = 1.0 / length_scale(units)
+    ax, s = figure_axes(ax, (6, 6), units)
     _outline(ax, mesh, s)
     a = result.axis.direction
     c = result.contacts * s
@@ -140,9 +131,7 @@ def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
 
 def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
     """The best ``n`` grasp axes of a pad plan drawn on the part, ranked."""
-    if ax is None:
-        _, ax = new_figure((6, 6))
-    s = 1.0 / length_scale(units)
+    ax, s = figure_axes(ax, (6, 6), units)
     _outline(ax, mesh, s)
     for k, row in enumerate(plan.rows[:n]):
         if row["quality"] <= 0:
@@ -165,11 +154,8 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
 
 def save_pad_plots(result, mesh, out_dir: str | Path, units: str = "mm") -> list[Path]:
     """Write ``quality.png`` and ``grasp.png`` into ``out_dir``; return the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, fn in (("quality.png", plot_pad_quality), ("grasp.png", None)):
-        fig = fn(result, units=units) if fn is not None else plot_pad_grasp(result, mesh, units=units)
-        save_figure(fig, out / name)
-        paths.append(out / name)
-    return paths
+    def grasp(res, ax, units):
+        return plot_pad_grasp(res, mesh, ax=ax, units=units)
+
+    return save_plots(result, out_dir, units, (("quality.png", plot_pad_quality, (7, 4.5)),
+                                               ("grasp.png", grasp, (6, 6))))
