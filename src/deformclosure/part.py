@@ -27,9 +27,11 @@ import shapely
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 from shapely.geometry import LinearRing, Polygon
 
-from . import limits as _limits
-from .errors import PartError
-from .units import LENGTH_UNITS, length_scale
+from .choices import PLANES, choose
+from .errors import DeformClosureError, PartError
+from .geometry import point_set_diameter, signed_area, touch_tolerance
+from .jsonfile import InputFile, Source
+from .units import length_scale
 
 __all__ = [
     "Material",
@@ -40,9 +42,17 @@ __all__ = [
     "MAX_TRIANGLES",
 ]
 
-#: Largest number of triangles a mesh may have (see :mod:`deformclosure.limits`); a part
-#: file whose area / max_area alone exceeds it is refused on reading.
-MAX_TRIANGLES = _limits.MAX_TRIANGLES
+
+def __getattr__(name: str) -> Any:
+    # MAX_TRIANGLES: the largest number of triangles a mesh may have, defined in
+    # :mod:`deformclosure.limits` (a higher layer, imported when used); a part file whose
+    # area / max_area alone exceeds it is refused on reading.
+    if name == "MAX_TRIANGLES":
+        from .limits import MAX_TRIANGLES
+
+        return MAX_TRIANGLES
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 #: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
 #: it, areas overflow and the geometry checks are meaningless.
@@ -180,6 +190,17 @@ class Material:
         Radius ``ℓ`` (m) of the disc over which strains are averaged before they are
         compared with ``e_L`` by the pad model (SPEC §6, theory of critical distances);
         ``None``: 2 % of the part's diameter.
+
+    Examples
+    --------
+    Soft rubber, 1 mm thick (every value in SI):
+
+    >>> Material(2e6, 0.1, 1e-3, 0.8)
+    Material(youngs_modulus=2000000.0, poisson_ratio=0.1, thickness=0.001, elastic_limit_strain=0.8, plane='stress', critical_distance=None)
+    >>> Material(2e6, 0.5, 1e-3, 0.8)
+    Traceback (most recent call last):
+    ...
+    deformclosure.errors.PartError: material.poisson_ratio = 0.5: must satisfy -1 < poisson_ratio < 0.5 (0.5 is incompressible; use 0.49)
     """
 
     youngs_modulus: float
@@ -191,11 +212,8 @@ class Material:
 
     def __post_init__(self) -> None:
         _check_material(self.youngs_modulus, self.poisson_ratio, self.thickness,
-                        self.elastic_limit_strain, self.plane, prefix="material")
-        cd = self.critical_distance
-        if cd is not None and not (math.isfinite(cd) and cd >= 0):
-            raise PartError(f"material.critical_distance = {cd!r}: must be a finite length >= 0 "
-                            "in the part's units (or omit it for 2 % of the part's diameter)")
+                        self.elastic_limit_strain, self.plane, self.critical_distance,
+                        prefix="material")
 
     @classmethod
     def from_dict(cls, data: Any, scale: float = 1.0, where: str = "material") -> "Material":
@@ -228,12 +246,9 @@ class Material:
             mat = _MaterialModel.model_validate(data)
         except ValidationError as err:
             raise PartError(_pydantic_message(err, ("material",), where)) from None
-        _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
-                        mat.elastic_limit_strain, mat.plane, prefix=where)
         cd = mat.critical_distance
-        if cd is not None and not (math.isfinite(cd) and cd >= 0):
-            raise PartError(f"{where}.critical_distance = {cd!r}: must be a finite length >= 0 "
-                            "(or omit it for 2 % of the part's diameter)")
+        _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
+                        mat.elastic_limit_strain, mat.plane, cd, prefix=where)
         if not math.isfinite(mat.thickness * scale) or mat.thickness * scale <= 0:
             raise PartError(f"{where}.thickness = {mat.thickness!r}: out of range in these units")
         return cls(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
@@ -253,15 +268,17 @@ class Material:
         return d
 
 
-def read_material(source: str, units: str = "m", where: str = "--material") -> Material:
+def read_material(source: str | InputFile, units: str = "m", where: str = "--material"
+                  ) -> Material:
     """The material given on a command line: a JSON file or inline JSON text.
 
     Parameters
     ----------
-    source : str
-        Inline JSON (starting with ``{``) or the path of a JSON file holding either a
-        material object (the ``"material"`` block of a part file, optionally with its own
-        ``"units"``) or a whole part or mesh file, whose material and units are taken.
+    source : str, path or Source
+        Inline JSON (starting with ``{``), or the path (or :class:`~deformclosure.jsonfile.Source`)
+        of a JSON file holding either a material object (the ``"material"`` block of a part
+        file, optionally with its own ``"units"``) or a whole part or mesh file, whose
+        material and units are taken.
     units : str
         Unit of ``thickness`` and ``critical_distance`` when the source states none.
     where : str
@@ -279,11 +296,11 @@ def read_material(source: str, units: str = "m", where: str = "--material") -> M
     """
     from .jsonfile import parse_json, read_json
 
-    text = source.strip()
-    if text.startswith("{"):
-        data = parse_json(text, where, PartError, "material")
+    if isinstance(source, str) and source.strip().startswith("{"):
+        data = parse_json(source.strip(), where, PartError, "material")
     else:
-        data = read_json(Path(source), PartError, "material file")
+        data = read_json(source if isinstance(source, Source) else Path(source), PartError,
+                         "material file")
     if not isinstance(data, dict):
         raise PartError(f"{where}: expected a JSON object with youngs_modulus, poisson_ratio, "
                         "thickness and elastic_limit_strain")
@@ -291,14 +308,13 @@ def read_material(source: str, units: str = "m", where: str = "--material") -> M
     unit = data.pop("units", units)
     if "material" in data:       # a part or mesh file: its material block, its units
         data = data["material"]
-    if not isinstance(unit, str) or unit not in LENGTH_UNITS:
-        valid = ", ".join(repr(u) for u in LENGTH_UNITS)
-        raise PartError(f"{where}.units = {unit!r}: unknown length unit; use one of {valid}")
-    return Material.from_dict(data, length_scale(unit, "units"), where)
+    return Material.from_dict(data, length_scale(unit, f"{where}.units", PartError), where)
 
 
 def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
-                    prefix: str) -> None:
+                    critical_distance: float | None, prefix: str) -> None:
+    """Refuse material values outside their physical ranges, naming ``prefix.field``."""
+    cd = critical_distance
     checks = [
         ("youngs_modulus", E, math.isfinite(E) and E > 0,
          "must be a finite number > 0 in Pa (e.g. 2e6 for soft rubber)"),
@@ -307,12 +323,14 @@ def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
         ("thickness", t, math.isfinite(t) and t > 0, "must be a finite number > 0"),
         ("elastic_limit_strain", eL, math.isfinite(eL) and eL > 0,
          "must be a finite strain > 0 (e.g. 0.8)"),
+        ("critical_distance", cd, cd is None or (math.isfinite(cd) and cd >= 0),
+         "must be a finite length >= 0 in the part's units (or omit it for 2 % of the "
+         "part's diameter)"),
     ]
     for name, value, ok, fix in checks:
         if not ok:
             raise PartError(f"{prefix}.{name} = {value!r}: {fix}")
-    if plane not in ("stress", "strain"):
-        raise PartError(f"{prefix}.plane = {plane!r}: use 'stress' or 'strain'")
+    choose(plane, PLANES, f"{prefix}.plane", PartError)
 
 
 @dataclass(frozen=True)
@@ -327,6 +345,11 @@ class MeshOptions:
         Smallest triangle angle (degrees), 0 < min_angle ≤ 34.
     points : ndarray, shape (k, 2)
         Extra points (m) inserted as mesh nodes, e.g. intended contact locations.
+
+    Examples
+    --------
+    >>> MeshOptions(max_area=1e-6).min_angle, MeshOptions().points.shape
+    (30.0, (0, 2))
     """
 
     max_area: float | None = None
@@ -349,6 +372,14 @@ class Part:
         Hole rings (m), clockwise, not closed.
     material : Material
     mesh_options : MeshOptions
+
+    Examples
+    --------
+    Build one with :meth:`from_dict` or :meth:`from_file`; the built-in example:
+
+    >>> part = demo_part()
+    >>> part.units, part.outer.shape, round(part.area * 1e6, 9)     # mm², from SI
+    ('mm', (4, 2), 240.0)
     """
 
     name: str
@@ -363,10 +394,31 @@ class Part:
     def from_dict(cls, data: Any) -> "Part":
         """Build a validated part from the JSON structure of SPEC §5.
 
+        Parameters
+        ----------
+        data : dict
+            ``name``, ``units`` (of every length), ``outer`` and ``holes`` rings,
+            ``material`` (``youngs_modulus`` in Pa) and optional ``mesh`` options.
+
+        Returns
+        -------
+        Part
+            In SI units (m, Pa), outer ring counter-clockwise, holes clockwise.
+
         Raises
         ------
         PartError
             With a one-line message naming the offending field and the fix.
+
+        Examples
+        --------
+        A 12 × 20 mm rubber block:
+
+        >>> part = Part.from_dict({"units": "mm", "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
+        ...     "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1,
+        ...                  "elastic_limit_strain": 0.8}})
+        >>> round(part.area * 1e6, 9), round(part.diameter * 1e3, 6)   # mm², mm
+        (240.0, 23.323808)
         """
         if not isinstance(data, dict):
             raise PartError("part file: top level must be a JSON object {...}")
@@ -374,25 +426,33 @@ class Part:
             model = _PartModel.model_validate(data)
         except ValidationError as err:
             raise PartError(_pydantic_message(err)) from None
-        scale = length_scale(model.units, "units") if model.units in LENGTH_UNITS else None
-        if scale is None:
-            valid = ", ".join(repr(u) for u in LENGTH_UNITS)
-            raise PartError(f"units: unknown length unit {model.units!r}; use one of {valid}")
+        scale = length_scale(model.units, "units", PartError)
         outer = _clean_ring(model.outer, "outer") * scale
         holes = tuple(_clean_ring(h, f"holes[{i}]") * scale for i, h in enumerate(model.holes))
         material = Material.from_dict(data["material"], scale)
         outer, holes = _validate_geometry(outer, holes)
-        from .geometry import point_set_diameter
+        diameter = point_set_diameter(outer)
+        from . import limits as _limits     # a higher layer: imported when used
 
-        _limits.check_ring_gaps(outer, holes, point_set_diameter(outer), units=model.units,
-                                scale=scale)
-        opts = _validate_mesh_options(model.mesh, scale, outer, holes)
+        _limits.check_ring_gaps(outer, holes, diameter, units=model.units, scale=scale)
+        opts = _validate_mesh_options(model.mesh, scale, outer, holes, diameter)
         return cls(model.name, model.units, outer, holes, material, opts)
 
     @classmethod
-    def from_file(cls, path: str | Path) -> "Part":
+    def from_file(cls, path: InputFile) -> "Part":
         """Read and validate a part file (JSON, SPEC §5), or a DXF/SVG drawing whose
-        material is in ``<name>.material.json`` beside it (:mod:`deformclosure.drawing`)."""
+        material is in ``<name>.material.json`` beside it (:mod:`deformclosure.drawing`).
+
+        Parameters
+        ----------
+        path : str, Path or Source
+            The file, or a :class:`~deformclosure.jsonfile.Source` holding its bytes
+            (its name selects the format and names the file in errors).
+
+        Raises
+        ------
+        PartError
+        """
         from .drawing import is_drawing_file, part_from_drawing
         from .jsonfile import read_json
 
@@ -415,11 +475,9 @@ class Part:
     def diameter(self) -> float:
         """Largest distance between two outer-ring vertices (m).
 
-        Rotating calipers on the convex hull: a 20 000-vertex ring no longer builds a
-        20 000² distance table.
+        The one definition of :func:`deformclosure.geometry.point_set_diameter`, as for
+        meshes and contact graphs.
         """
-        from .geometry import point_set_diameter
-
         return point_set_diameter(self.outer)
 
     def sanity_warnings(self) -> list[str]:
@@ -458,17 +516,23 @@ class Part:
 
 
 # --------------------------------------------------------------------------- checks
+def check_coordinates(xy: np.ndarray, fld: str, error: type[DeformClosureError]) -> np.ndarray:
+    """``xy`` (rows of coordinates) if all are finite and at most :data:`MAX_COORDINATE`
+    in magnitude; else ``error`` naming the first bad row ``fld[i]``."""
+    if not np.all(np.isfinite(xy)):
+        bad = int(np.argwhere(~np.isfinite(xy))[0, 0])
+        raise error(f"{fld}[{bad}]: coordinate is not finite (NaN or inf); give numbers")
+    if np.any(np.abs(xy) > MAX_COORDINATE):
+        bad = int(np.argwhere(np.abs(xy) > MAX_COORDINATE)[0, 0])
+        raise error(f"{fld}[{bad}]: coordinate is larger than {MAX_COORDINATE:g} in magnitude; "
+                    "check the units")
+    return xy
+
+
 def _clean_ring(coords: list[list[float]], fld: str) -> np.ndarray:
     if any(len(p) != 2 for p in coords):
         raise PartError(f"{fld}: every point must be a pair [x, y]")
-    ring = np.asarray(coords, dtype=float).reshape(-1, 2)
-    if not np.all(np.isfinite(ring)):
-        bad = int(np.argwhere(~np.isfinite(ring))[0, 0])
-        raise PartError(f"{fld}[{bad}]: coordinate is not finite (NaN or inf); give numbers")
-    if np.any(np.abs(ring) > MAX_COORDINATE):
-        bad = int(np.argwhere(np.abs(ring) > MAX_COORDINATE)[0, 0])
-        raise PartError(f"{fld}[{bad}]: coordinate is larger than {MAX_COORDINATE:g} in magnitude; "
-                        "check the units")
+    ring = check_coordinates(np.asarray(coords, dtype=float).reshape(-1, 2), fld, PartError)
     if len(ring) > 1 and np.array_equal(ring[0], ring[-1]):
         ring = ring[:-1]
     keep = np.any(ring != np.roll(ring, 1, axis=0), axis=1) if len(ring) > 1 else np.ones(len(ring), bool)
@@ -476,11 +540,6 @@ def _clean_ring(coords: list[list[float]], fld: str) -> np.ndarray:
     if len(ring) < 3:
         raise PartError(f"{fld}: a ring needs at least 3 distinct points (got {len(ring)})")
     return ring
-
-
-def _signed_area(ring: np.ndarray) -> float:
-    x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 def _validate_geometry(outer: np.ndarray, holes: tuple[np.ndarray, ...]
@@ -491,11 +550,11 @@ def _validate_geometry(outer: np.ndarray, holes: tuple[np.ndarray, ...]
         lr = LinearRing(ring)
         if not lr.is_simple:
             raise PartError(f"{fld}: ring is self-intersecting; reorder its points so edges do not cross")
-        if abs(_signed_area(ring)) <= 1e-12 * scale**2:
+        if abs(signed_area(ring)) <= 1e-12 * scale**2:
             raise PartError(f"{fld}: ring has zero area; give at least 3 non-collinear points")
-    if _signed_area(outer) < 0:
+    if signed_area(outer) < 0:
         outer = outer[::-1].copy()
-    holes = tuple(h[::-1].copy() if _signed_area(h) > 0 else h for h in holes)
+    holes = tuple(h[::-1].copy() if signed_area(h) > 0 else h for h in holes)
     outer_poly = Polygon(outer)
     hole_polys = [Polygon(h) for h in holes]
     for i, hp in enumerate(hole_polys):
@@ -512,7 +571,10 @@ def _validate_geometry(outer: np.ndarray, holes: tuple[np.ndarray, ...]
 
 
 def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
-                           holes: tuple[np.ndarray, ...]) -> MeshOptions:
+                           holes: tuple[np.ndarray, ...], diameter: float) -> MeshOptions:
+    from . import limits as _limits     # a higher layer: imported when used
+    from .limits import MAX_TRIANGLES
+
     poly = Polygon(outer, list(holes))
     if not (math.isfinite(m.min_angle) and 0.0 < m.min_angle <= 34.0):
         raise PartError(f"mesh.min_angle = {m.min_angle!r}: use 0 < min_angle <= 34 degrees "
@@ -529,16 +591,10 @@ def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
     if any(len(p) != 2 for p in m.points):
         raise PartError("mesh.points: every point must be a pair [x, y]")
     _limits.check_mesh_points(len(m.points))
-    pts = np.asarray(m.points, dtype=float).reshape(-1, 2)
-    if not np.all(np.isfinite(pts)):
-        raise PartError("mesh.points: coordinate is not finite (NaN or inf); give numbers")
-    if np.any(np.abs(pts) > MAX_COORDINATE):
-        raise PartError(f"mesh.points: coordinate is larger than {MAX_COORDINATE:g} in magnitude; "
-                        "check the units")
-    pts = pts * scale
+    pts = check_coordinates(np.asarray(m.points, dtype=float).reshape(-1, 2), "mesh.points",
+                            PartError) * scale
     if len(pts):
-        tol = 1e-9 * float(np.ptp(outer, axis=0).max())
-        inside = _limits.points_within(poly, pts, tol)  # indexed: no points × edges work
+        inside = _limits.points_within(poly, pts, touch_tolerance(diameter))  # indexed
         if not inside.all():
             bad = int(np.flatnonzero(~inside)[0])
             raise PartError(f"mesh.points[{bad}]: point lies outside the part; move it onto or inside the part")
@@ -558,6 +614,12 @@ def demo_part(max_area_mm2: float = 1.0) -> Part:
     ----------
     max_area_mm2 : float
         Largest triangle area (mm²).
+
+    Examples
+    --------
+    >>> part = demo_part()
+    >>> part.name, round(part.diameter * 1e3, 6), part.mesh_options.points.tolist()
+    ('rubber-12x20', 23.323808, [[0.0, 0.01], [0.012, 0.01]])
     """
     return Part.from_dict({
         "name": "rubber-12x20",
@@ -581,6 +643,12 @@ def notched_part(max_area_mm2: float = 0.4) -> Part:
     ----------
     max_area_mm2 : float
         Largest triangle area (mm²).
+
+    Examples
+    --------
+    >>> part = notched_part()
+    >>> part.name, len(part.outer), round(part.area * 1e6, 9)     # mm²: 360 − 2 × 9
+    ('notched-bar-30x12', 10, 342.0)
     """
     return Part.from_dict({
         "name": "notched-bar-30x12",

@@ -6,6 +6,8 @@ converted once, on reading.
 
 from __future__ import annotations
 
+from .errors import DeformClosureError
+
 __all__ = ["LENGTH_UNITS", "length_scale", "SI_UNITS"]
 
 #: Metres per unit of each accepted length unit.
@@ -21,7 +23,8 @@ SI_UNITS: dict[str, str] = {
 }
 
 
-def length_scale(unit: str, field: str = "units") -> float:
+def length_scale(unit: str, field: str = "units",
+                 error: type[DeformClosureError] = DeformClosureError) -> float:
     """Metres per ``unit``.
 
     Parameters
@@ -30,18 +33,26 @@ def length_scale(unit: str, field: str = "units") -> float:
         One of ``"m"``, ``"cm"``, ``"mm"``, ``"in"``.
     field : str
         Name of the field the unit came from, used in the error message.
+    error : DeformClosureError subclass
+        Raised for an unknown unit (the reader's own: ``PartError``, ``MeshError``…).
 
     Raises
     ------
     DeformClosureError
-        If ``unit`` is not a known unit.
-    """
-    from .errors import DeformClosureError
+        If ``unit`` is not a known unit (as ``error``), with one line naming ``field``
+        and listing the units.
 
+    Examples
+    --------
+    >>> length_scale("mm")
+    0.001
+    >>> length_scale("ft", "part.units")
+    Traceback (most recent call last):
+    ...
+    deformclosure.errors.DeformClosureError: part.units: unknown length unit 'ft'; use one of 'm', 'cm', 'mm', 'in'
+    """
     try:
         return LENGTH_UNITS[unit]
     except (KeyError, TypeError):
         valid = ", ".join(repr(u) for u in LENGTH_UNITS)
-        raise DeformClosureError(
-            f"{field}: unknown length unit {unit!r}; use one of {valid}"
-        ) from None
+        raise error(f"{field}: unknown length unit {unit!r}; use one of {valid}") from None

@@ -23,7 +23,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import StiffnessError
 from ..log import done
-from .solve import pinned_dofs, rigid_modes
+from .solve import PinnedFactorisation, pinned_dofs
 
 __all__ = ["CondensedCompliance", "node_adjacency", "nested_dissection_order"]
 
@@ -55,7 +55,7 @@ def nested_dissection_order(adjacency: sp.csr_matrix) -> np.ndarray:
     return np.asarray(perm, dtype=np.int64)
 
 
-class CondensedCompliance:
+class CondensedCompliance(PinnedFactorisation):
     """One factorisation of a free part's ``K``; compliance of chosen boundary nodes.
 
     Parameters
@@ -90,56 +90,26 @@ class CondensedCompliance:
         boundary = np.asarray(boundary, dtype=np.int64)
         self.boundary = boundary
         self.n_nodes = n
-        self._nodes = np.asarray(nodes, float)
-        is_b = np.zeros(n, bool)
-        is_b[boundary] = True
-        interior = np.flatnonzero(~is_b)
+        self.nodes = np.asarray(nodes, float)
         # Rigid modes: pin 3 DOFs, chosen among the boundary nodes so that the interior
         # stays untouched (both DOFs of one node, one of a far node).
         pins = pinned_dofs_among(nodes, boundary)
-        adj = node_adjacency(triangles, n)
-        order_int = interior[nested_dissection_order(adj[interior][:, interior])] \
-            if len(interior) else interior
-        node_order = np.concatenate([order_int, boundary])
-        dof_order = np.column_stack([2 * node_order, 2 * node_order + 1]).ravel()
-        dof_order = dof_order[~np.isin(dof_order, pins)]
-        self.dof_order = dof_order
+        dof_order = _interior_first_order(triangles, n, boundary, pins)
+        self.dof_order = self.free_dofs = dof_order
         self.pins = pins
         Kp = sp.csc_matrix(K)[dof_order][:, dof_order].tocsc()
-        try:
-            lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                           options={"SymmetricMode": True, "Equil": False})
-        except RuntimeError as err:
-            raise StiffnessError(f"stiffness is singular beyond the 3 rigid modes ({err}); "
-                                 "the mesh is disconnected or a mechanism") from None
+        lu = self._factorise(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                             options={"SymmetricMode": True, "Equil": False})
         N = len(dof_order)
         if not (np.array_equal(lu.perm_r, np.arange(N)) and np.array_equal(lu.perm_c, np.arange(N))):
             raise StiffnessError("sparse LU reordered the condensation; K is not positive definite "
                                  "after removing the rigid modes")
         self._lu = lu
         nb = 2 * len(boundary) - int(np.isin(pins, _dofs(boundary)).sum())
-        # K is symmetric and factorised without pivoting, so U = D Lᵀ and the Schur
-        # complement is S = L₂₂ D₂₂ L₂₂ᵀ: its Cholesky factor is L₂₂ D₂₂^½, and LAPACK's
-        # potri inverts S from it directly (no dense product, no second factorisation).
-        L22 = _trailing_block(lu.L, N - nb)
-        d = _trailing_diagonal(lu.U, N - nb)
-        if np.any(d <= 0) or np.min(d) < 1e-13 * np.max(d):
-            raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes; "
-                                 "the mesh is disconnected or a mechanism")
-        import scipy.linalg as sla
-
-        R = np.asfortranarray(L22 * np.sqrt(d)[None, :])
-        Cl, info = sla.lapack.dpotri(R, lower=1, overwrite_c=1)
-        if info != 0:
-            raise StiffnessError("condensed stiffness is not positive definite; K has more than "
-                                 "3 zero-energy modes")
-        Cb = np.tril(Cl)
-        Cb = Cb + np.tril(Cb, -1).T
+        Cb = _schur_inverse(lu, N - nb)
         # Place into the full (2q x 2q) boundary compliance; pinned DOFs get zeros.
-        bd = _dofs(boundary)
-        keep = ~np.isin(bd, pins)
+        idx = np.flatnonzero(~np.isin(_dofs(boundary), pins))
         C = np.zeros((2 * len(boundary), 2 * len(boundary)))
-        idx = np.flatnonzero(keep)
         C[np.ix_(idx, idx)] = Cb
         self.C = C
         self._pos = np.full(n, -1, dtype=np.int64)
@@ -151,21 +121,44 @@ class CondensedCompliance:
         """Row index (node position in ``boundary``) of node ids; -1 if not condensed."""
         return self._pos[np.asarray(node_ids)]
 
-    def solve(self, f: np.ndarray) -> np.ndarray:
-        """Displacement field (m), shape like ``f`` (``(2n,)`` or ``(2n, r)``), for loads ``f`` (N).
 
-        Valid for self-equilibrated loads; the pinned DOFs are zero.
-        """
-        f = np.asarray(f, float)
-        u = np.zeros(f.shape)
-        u[self.dof_order] = self._lu.solve(np.ascontiguousarray(f[self.dof_order]))
-        return u
+def _interior_first_order(triangles: np.ndarray, n: int, boundary: np.ndarray,
+                          pins: np.ndarray) -> np.ndarray:
+    """The unpinned DOFs in elimination order: interior nodes first, by METIS nested
+    dissection, then the boundary nodes (so the trailing block of the factor is the
+    Schur complement on the boundary)."""
+    is_b = np.zeros(n, bool)
+    is_b[boundary] = True
+    interior = np.flatnonzero(~is_b)
+    adj = node_adjacency(triangles, n)
+    order_int = interior[nested_dissection_order(adj[interior][:, interior])] \
+        if len(interior) else interior
+    node_order = np.concatenate([order_int, boundary])
+    dof_order = np.column_stack([2 * node_order, 2 * node_order + 1]).ravel()
+    return dof_order[~np.isin(dof_order, pins)]
 
-    def project_out_rigid(self, u: np.ndarray) -> np.ndarray:
-        """``u`` minus its least-squares rigid part."""
-        R = rigid_modes(self._nodes)
-        coef, *_ = np.linalg.lstsq(R, u, rcond=None)
-        return u - R @ coef
+
+def _schur_inverse(lu: spla.SuperLU, start: int) -> np.ndarray:
+    """Inverse of the Schur complement on the trailing DOFs ``start:`` of an unpivoted LU.
+
+    K is symmetric and factorised without pivoting, so U = D Lᵀ and the Schur
+    complement is S = L₂₂ D₂₂ L₂₂ᵀ: its Cholesky factor is L₂₂ D₂₂^½, and LAPACK's
+    potri inverts S from it directly (no dense product, no second factorisation).
+    """
+    import scipy.linalg as sla
+
+    L22 = _trailing_block(lu.L, start)
+    d = _trailing_diagonal(lu.U, start)
+    if np.any(d <= 0) or np.min(d) < 1e-13 * np.max(d):
+        raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes; "
+                             "the mesh is disconnected or a mechanism")
+    R = np.asfortranarray(L22 * np.sqrt(d)[None, :])
+    Cl, info = sla.lapack.dpotri(R, lower=1, overwrite_c=1)
+    if info != 0:
+        raise StiffnessError("condensed stiffness is not positive definite; K has more than "
+                             "3 zero-energy modes")
+    Cb = np.tril(Cl)
+    return Cb + np.tril(Cb, -1).T
 
 
 def _dofs(nodes_: np.ndarray) -> np.ndarray:

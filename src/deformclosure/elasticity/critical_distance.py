@@ -27,7 +27,7 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import GraspError
+from ..errors import GraspError, MeshError
 from .strain import principal_strains
 
 __all__ = [
@@ -133,8 +133,8 @@ def _operator(mesh, ell: float | None, operator) -> sp.csr_matrix:
                              "averaging operator")
         return averaging_operator(mesh, ell)
     if operator.shape != (m, m):
-        raise ValueError(f"operator must have shape ({m}, {m}) for this mesh, "
-                         f"got {operator.shape}")
+        raise MeshError(f"operator: shape {operator.shape} does not fit this mesh of {m} "
+                        "triangles; build it with averaging_operator(mesh, ell)")
     return operator
 
 
@@ -163,13 +163,14 @@ def averaged_strains(mesh, strains: np.ndarray, ell: float | None,
     ------
     GraspError
         If ``ell`` is invalid (and no operator is given).
-    ValueError
+    MeshError
         If ``strains`` or ``operator`` do not match the mesh.
     """
     m = len(mesh.triangles)
     e = np.asarray(strains, float)
     if e.ndim not in (2, 3) or e.shape[-2:] != (m, 3):
-        raise ValueError(f"strains must have shape ({m}, 3) or (k, {m}, 3), got {e.shape}")
+        raise MeshError(f"strains: shape {e.shape} does not fit this mesh of {m} triangles; "
+                        f"give ({m}, 3) or (k, {m}, 3) [exx, eyy, gamma_xy] per element")
     W = _operator(mesh, ell, operator)
     if e.ndim == 2:
         return np.asarray(W @ e)

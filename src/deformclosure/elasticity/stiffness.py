@@ -242,6 +242,20 @@ def stiffness_matrix(mesh, material: Material | None = None) -> sp.csr_matrix:
     -----
     For a connected mesh the null space of ``K`` is exactly the three planar rigid
     modes (tested). The energy of a displacement ``u`` is ``½ uᵀ K u`` (J).
+
+    Examples
+    --------
+    A unit square of two triangles: ``K`` is symmetric and a rigid translation costs no
+    energy.
+
+    >>> from deformclosure import Material, Mesh
+    >>> mesh = Mesh.from_arrays([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2], [0, 2, 3]],
+    ...                         Material(1e6, 0.3, 1e-3, 0.1))
+    >>> K = stiffness_matrix(mesh)
+    >>> K.shape, bool(abs(K - K.T).max() == 0)
+    ((8, 8), True)
+    >>> bool(abs(K @ np.tile([1.0, 0.0], 4)).max() < 1e-9 * abs(K).max())   # N/m · m
+    True
     """
     material = material if material is not None else mesh.material
     if material is None:

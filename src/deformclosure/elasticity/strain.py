@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import MeshError
 from .stiffness import element_b_matrices
 
 __all__ = ["element_strains", "principal_strains", "strain_magnitude", "element_stresses"]
@@ -21,7 +22,8 @@ def _as_nodal(u: np.ndarray, n: int) -> np.ndarray:
         return u.reshape(n, 2)
     if u.shape == (n, 2):
         return u
-    raise ValueError(f"displacement must have shape ({2 * n},) or ({n}, 2), got {u.shape}")
+    raise MeshError(f"u: displacement of shape {u.shape} does not fit a mesh of {n} nodes; "
+                    f"give shape ({2 * n},) (x0, y0, x1, ...) or ({n}, 2)")
 
 
 def element_strains(mesh, u: np.ndarray) -> np.ndarray:
@@ -32,6 +34,21 @@ def element_strains(mesh, u: np.ndarray) -> np.ndarray:
     mesh : Mesh
     u : ndarray, shape (2n,) or (n, 2)
         Nodal displacements (m).
+
+    Raises
+    ------
+    MeshError
+        If ``u`` does not fit the mesh.
+
+    Examples
+    --------
+    A unit square stretched by 1 % along x:
+
+    >>> from deformclosure import Mesh
+    >>> mesh = Mesh.from_arrays([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2], [0, 2, 3]])
+    >>> element_strains(mesh, 0.01 * mesh.nodes * [1, 0]).round(12)
+    array([[0.01, 0.  , 0.  ],
+           [0.01, 0.  , 0.  ]])
     """
     un = _as_nodal(u, mesh.n_nodes)
     B, _ = element_b_matrices(mesh.nodes, mesh.triangles)
@@ -40,7 +57,15 @@ def element_strains(mesh, u: np.ndarray) -> np.ndarray:
 
 
 def principal_strains(strains: np.ndarray) -> np.ndarray:
-    """In-plane principal strains ``(e1, e2)``, ``e1 >= e2``, shape ``(m, 2)``."""
+    """In-plane principal strains ``(e1, e2)``, ``e1 >= e2``, shape ``(m, 2)``.
+
+    Examples
+    --------
+    Pure shear ``gamma_xy = 0.02`` has principal strains ``±0.01``:
+
+    >>> principal_strains(np.array([[0.0, 0.0, 0.02]]))
+    array([[ 0.01, -0.01]])
+    """
     exx, eyy, g = strains[:, 0], strains[:, 1], strains[:, 2]
     c = 0.5 * (exx + eyy)
     r = np.hypot(0.5 * (exx - eyy), 0.5 * g)
@@ -48,7 +73,16 @@ def principal_strains(strains: np.ndarray) -> np.ndarray:
 
 
 def strain_magnitude(mesh, u: np.ndarray) -> np.ndarray:
-    """Largest absolute in-plane principal strain of every element, shape ``(m,)``."""
+    """Largest absolute in-plane principal strain of every element, shape ``(m,)``
+    (SPEC §1: the strain compared with ``e_L``).
+
+    Examples
+    --------
+    >>> from deformclosure import Mesh
+    >>> mesh = Mesh.from_arrays([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2], [0, 2, 3]])
+    >>> strain_magnitude(mesh, -0.02 * mesh.nodes * [0, 1]).round(12)     # 2 % squeeze
+    array([0.02, 0.02])
+    """
     e = principal_strains(element_strains(mesh, u))
     return np.abs(e).max(axis=1)
 

@@ -13,26 +13,38 @@ from numba import njit
 __all__ = ["bottleneck_escape", "release_sweep", "neighbour_min"]
 
 
-@njit(cache=True, nogil=True)
-def _heap_push(keys, vals, size, key, val):  # pragma: no cover - compiled
-    i = size
+@njit(cache=True, nogil=True, inline="always")
+def _heap_move(keys, vals, dst, src):  # pragma: no cover - compiled
+    """Entry ``src`` of the binary heap ``(keys, vals)`` moves to slot ``dst``."""
+    keys[dst] = keys[src]
+    vals[dst] = vals[src]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _heap_put(keys, vals, i, key, val):  # pragma: no cover - compiled
+    """Slot ``i`` of the heap takes the entry ``(key, val)``."""
     keys[i] = key
     vals[i] = val
+
+
+@njit(cache=True, nogil=True)
+def _heap_push(keys, vals, size, key, val):  # pragma: no cover - compiled
+    """Add ``(key, val)`` (sift up from the end); returns the new size."""
+    i = size
     while i > 0:
         p = (i - 1) >> 1
         if keys[p] <= key:
             break
-        keys[i] = keys[p]
-        vals[i] = vals[p]
+        _heap_move(keys, vals, i, p)
         i = p
-    keys[i] = key
-    vals[i] = val
+    _heap_put(keys, vals, i, key, val)
     return size + 1
 
 
 @njit(cache=True, nogil=True)
 def _heap_pop(keys, vals, size):  # pragma: no cover - compiled
-    """Remove the root; returns the new size (the root must be read before)."""
+    """Remove the root (sift the last entry down); returns the new size (the root must
+    be read before)."""
     size -= 1
     if size == 0:
         return 0
@@ -47,11 +59,9 @@ def _heap_pop(keys, vals, size):  # pragma: no cover - compiled
             c += 1
         if keys[c] >= key:
             break
-        keys[i] = keys[c]
-        vals[i] = vals[c]
+        _heap_move(keys, vals, i, c)
         i = c
-    keys[i] = key
-    vals[i] = val
+    _heap_put(keys, vals, i, key, val)
     return size
 
 

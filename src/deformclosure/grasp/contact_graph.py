@@ -35,10 +35,9 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
-from scipy.spatial import ConvexHull
-from scipy.spatial.distance import pdist
 
 from ..errors import GraspError
+from ..geometry import point_set_diameter, signed_area, touch_tolerance
 
 __all__ = [
     "SLIDE",
@@ -56,9 +55,6 @@ SLIDE: int = 1
 SWING: int = 2
 
 _KIND_NAMES = ((SLIDE, "slide"), (SWING, "swing"))
-
-#: Relative touching tolerance of SPEC §3/§4 (fraction of the part's diameter).
-RELATIVE_TOLERANCE = 1e-9
 
 # (pivot, mover, edge) candidates whose circle/segment intersections are computed in one
 # vectorised batch; bounds the memory of the swing search (~100 MB at most).
@@ -99,6 +95,13 @@ class ContactGraph:
     -----
     Build it with :func:`contact_graph` from a part's boundary, or with
     :meth:`from_edges` from explicit arrays. The arrays are read-only.
+
+    Examples
+    --------
+    >>> g = ContactGraph.from_edges([[0, 1], [0, 2], [1, 2]], [[1, 0], [2, 1], [0, 1]],
+    ...                             [SLIDE, SWING, SWING])
+    >>> g.edges.tolist(), g.kinds.tolist(), g.neighbours(1).tolist()   # repeats merged
+    ([[0, 1], [1, 2]], [3, 2], [0, 2])
     """
 
     pairs: np.ndarray
@@ -375,31 +378,29 @@ def _check_loops(loops: Sequence[Any], n: int) -> list[np.ndarray]:
     return out
 
 
-def _signed_area(P: np.ndarray) -> float:
-    x, y = P[:, 0], P[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
 def part_diameter(nodes: np.ndarray, loops: Sequence[np.ndarray]) -> float:
-    """Largest distance between two boundary nodes (m).
+    """Largest distance between two boundary nodes (m): the part's diameter
+    (:func:`deformclosure.geometry.point_set_diameter` of the loop nodes).
 
     Parameters
     ----------
     nodes : ndarray, shape (n, 2)
+        Node coordinates (m).
     loops : sequence of int arrays
+        Boundary loops (node ids).
 
     Returns
     -------
     float
+
+    Examples
+    --------
+    >>> part_diameter(np.array([[0., 0.], [3., 0.], [3., 4.], [0., 4.]]), [np.arange(4)])
+    5.0
     """
     X = _check_nodes(nodes)
-    pts = X[np.unique(np.concatenate([np.asarray(lp, dtype=np.int64) for lp in loops]))]
-    if len(pts) > 2000:
-        try:
-            pts = pts[ConvexHull(pts).vertices]
-        except Exception:  # degenerate (collinear) input: fall back to all points
-            pass
-    return float(pdist(pts).max()) if len(pts) > 1 else 0.0
+    return point_set_diameter(X[np.unique(np.concatenate(
+        [np.asarray(lp, dtype=np.int64) for lp in loops]))])
 
 
 def _ccw_angle(u: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -427,7 +428,7 @@ class _Boundary:
         if len(set(vl)) != len(vl):
             raise GraspError(f"vertex_loops has repeated entries: {vl}")
         for i, lp in enumerate(loops_):
-            A = _signed_area(X[lp])
+            A = signed_area(X[lp])
             if i == 0 and not A > 0:
                 raise GraspError(f"outer loop 0 must be counter-clockwise (signed area {A:g})")
             if i > 0 and not A < 0:
@@ -445,9 +446,7 @@ class _Boundary:
         next_of[seg_p] = seg_q
         prev_of[seg_q] = seg_p
         diam = part_diameter(X, loops_)
-        if tol is None:
-            tol = RELATIVE_TOLERANCE * diam
-        tol = float(tol)
+        tol = touch_tolerance(diam) if tol is None else float(tol)
         if not (np.isfinite(tol) and tol >= 0):
             raise GraspError(f"tol must be a finite length >= 0 (m), got {tol}")
         vn = np.sort(np.concatenate([loops_[i] for i in vl]))
@@ -630,6 +629,118 @@ def _circle_segment_roots(Pc: np.ndarray, Dc: np.ndarray, Lc: np.ndarray, L2: np
     return s, ok
 
 
+class _SwingEdges:
+    """The boundary edges ``P + s D`` (``|D| = L``) and the wedge at every vertex node
+    (edges ``e1``/``e0`` to its next/previous loop node, interior angle ``beta``), for
+    the swing search."""
+
+    def __init__(self, bd: _Boundary) -> None:
+        X, vn = bd.X, bd.vn
+        self.P = X[bd.seg_p]
+        self.D = X[bd.seg_q] - self.P
+        self.L = np.hypot(self.D[:, 0], self.D[:, 1])
+        self.L2 = self.L * self.L
+        self.pb = X[vn]
+        self.e1 = X[bd.next_of[vn]] - self.pb
+        self.e0 = X[bd.prev_of[vn]] - self.pb
+        self.beta = _ccw_angle(self.e1, self.e0)
+        # 2 tol: a tangential touch counts up to tol beyond the edge's end; plus round-off.
+        self.margin = 2.0 * bd.tol + 1e-13 * bd.diameter
+
+
+def _arc_meetings(bd: _Boundary, ed: _SwingEdges, pac: np.ndarray, bpc: np.ndarray,
+                  rr: np.ndarray, ee: np.ndarray, mover: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where each candidate's circle meets its edge, relative to the pivot.
+
+    Candidate ``k``: pivot at ``pac[k]``, mover ``mover[k]`` at ``bpc[k]`` from it
+    (radius ``rr[k]``), edge ``ee[k]``. Four meetings per candidate: the two roots of
+    :func:`_circle_segment_roots` (within ``tol`` of the edge) and the edge's two end
+    nodes when they lie on the circle within ``tol`` (an arc through a node). Returns
+    the points ``(K, 4, 2)`` (m, relative to the pivot), which are valid — not the
+    start point ``b`` itself — and the node each is at (-1 inside an edge).
+    """
+    tol = bd.tol
+    Pc = ed.P[ee] - pac
+    Dc = ed.D[ee]
+    Lc = ed.L[ee]
+    sp_ = bd.seg_p[ee]
+    sq_ = bd.seg_q[ee]
+    s, v_root = _circle_segment_roots(Pc, Dc, Lc, ed.L2[ee], rr, bpc, sp_ == mover,
+                                      sq_ == mover, tol)
+    eps = (tol / Lc)[:, None]
+    v_root &= (s >= -eps) & (s <= 1.0 + eps)
+    s = np.clip(s, 0.0, 1.0)
+    Xr = Pc[:, None, :] + s[..., None] * Dc[:, None, :]
+    sl = s * Lc[:, None]
+    node_r = np.where(sl <= tol, sp_[:, None],
+                      np.where(Lc[:, None] - sl <= tol, sq_[:, None], -1))
+    # Nodes lying on the circle within tol are hits too (arc through a node).
+    Qc = Pc + Dc
+    v_end = np.stack([np.abs(np.hypot(Pc[:, 0], Pc[:, 1]) - rr) <= tol,
+                      np.abs(np.hypot(Qc[:, 0], Qc[:, 1]) - rr) <= tol], axis=1)
+    Xh = np.concatenate([Xr, np.stack([Pc, Qc], axis=1)], axis=1)  # (K, 4, 2), rel. a
+    valid = np.concatenate([v_root, v_end], axis=1)
+    node = np.concatenate([node_r, np.stack([sp_, sq_], axis=1)], axis=1)
+    # Ignore the start point b itself (node b, and meetings within tol of it).
+    near_b = np.hypot(Xh[..., 0] - bpc[:, None, 0], Xh[..., 1] - bpc[:, None, 1]) <= tol
+    valid &= ~near_b & (node != mover[:, None])
+    return Xh, valid, node
+
+
+def _first_hits(phi: np.ndarray, enter: np.ndarray, valid: np.ndarray, key: np.ndarray,
+                n_keys: int, rr: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The meetings first along the arc of their (pivot, mover) ``key``: smallest arc
+    angle ``phi``, and all within ``tol`` of arc length of it; none for the arcs that
+    ``enter`` the part at once. Returns their (candidate, meeting) indices."""
+    ph = np.where(valid, phi, np.inf)
+    gmin = np.full(n_keys, np.inf)
+    np.minimum.at(gmin, key, ph.min(axis=1))
+    gmin[enter.ravel()] = np.inf  # first motion enters the part: skipped
+    gk = gmin[key]
+    with np.errstate(invalid="ignore"):
+        first = valid & np.isfinite(gk)[:, None] & (rr[:, None] * (ph - gk[:, None]) <= tol)
+    return np.nonzero(first)
+
+
+def _swing_batch(bd: _Boundary, ed: _SwingEdges, piv: list[int],
+                 cands: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.ndarray, ...]]:
+    """Swing triples ``(a, b, c, direction)`` of a batch of pivots (local indices
+    ``piv``) with their (mover, edge) candidates, vectorised over the batch."""
+    vn, m = bd.vn, len(bd.vn)
+    nbat = len(piv)
+    rows = np.repeat(np.arange(nbat), [len(b) for b, _ in cands])
+    bb = np.concatenate([b for b, _ in cands])
+    ee = np.concatenate([e for _, e in cands])
+    if bb.size == 0:
+        return []
+    A = vn[np.asarray(piv)]
+    pa = bd.X[A]
+    bpd = ed.pb[None, :, :] - pa[:, None, :]  # (nbat, m, 2) dense pivot × mover
+    rd = np.hypot(bpd[..., 0], bpd[..., 1])
+    thd = np.arctan2(bpd[..., 1], bpd[..., 0])
+    enter_ccw, enter_cw = _enter_flags(bpd, rd, ed.e1[None], ed.e0[None], ed.beta[None], bd.tol)
+    rr = rd[rows, bb]
+    Xh, valid, node = _arc_meetings(bd, ed, pa[rows], bpd[rows, bb], rr, ee, vn[bb])
+    dth = np.arctan2(Xh[..., 1], Xh[..., 0]) - thd[rows, bb][:, None]
+    out = []
+    for direction, (phi, enter) in enumerate(((np.mod(dth, _TWO_PI), enter_ccw),
+                                              (np.mod(-dth, _TWO_PI), enter_cw))):
+        kr, kh = _first_hits(phi, enter, valid, rows * m + bb, nbat * m, rr, bd.tol)
+        nd = node[kr, kh]
+        isn = nd >= 0
+        # Hit at (within tol of) a node c: the arc meets every edge there.
+        rn = kr[isn]
+        cn = nd[isn]
+        # Hit inside an edge (crossing or tangential touch): both its end nodes.
+        re_ = kr[~isn]
+        krow = np.concatenate([rn, rn, rn, re_, re_])
+        c = np.concatenate([cn, bd.prev_of[cn], bd.next_of[cn], bd.seg_p[ee[re_]],
+                            bd.seg_q[ee[re_]]])
+        out.append((A[rows[krow]], vn[bb[krow]], c, np.full(krow.size, direction, dtype=np.int64)))
+    return out
+
+
 def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
                    mover: int | None = None
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -641,105 +752,21 @@ def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
 
     For every pivot ``a``, an edge can meet the circle of radius ``r = |b - a|`` only if
     ``dmin <= r <= dmax`` (distances from ``a`` to the edge, with a margin): with the
-    movers sorted by radius, each edge's candidate movers are one contiguous range.
-    The exact circle/segment intersections are then computed, vectorised, for batches
-    of (pivot, mover, edge) candidates from several pivots (:func:`_circle_segment_roots`:
-    stable quadratic roots, tangency within ``tol`` as one touch at the foot, and only
-    the far meeting on the mover's own edges).
+    movers sorted by radius, each edge's candidate movers are one contiguous range
+    (:func:`_swing_candidates`). The exact circle/segment intersections are then
+    computed, vectorised, for batches of (pivot, mover, edge) candidates from several
+    pivots (:func:`_swing_batch`; :func:`_circle_segment_roots`: stable quadratic roots,
+    tangency within ``tol`` as one touch at the foot, and only the far meeting on the
+    mover's own edges).
     """
-    X, vn, tol = bd.X, bd.vn, bd.tol
-    m = len(vn)
-    P = X[bd.seg_p]
-    D = X[bd.seg_q] - P
-    Ld = np.hypot(D[:, 0], D[:, 1])
-    L2 = Ld * Ld
-    pb = X[vn]
-    e1 = X[bd.next_of[vn]] - pb
-    e0 = X[bd.prev_of[vn]] - pb
-    beta = _ccw_angle(e1, e0)
-    # 2 tol: a tangential touch counts up to tol beyond the edge's end; plus round-off.
-    margin = 2.0 * tol + 1e-13 * bd.diameter
-
-    out_a: list[np.ndarray] = []
-    out_b: list[np.ndarray] = []
-    out_c: list[np.ndarray] = []
-    out_d: list[np.ndarray] = []
-
-    def process(piv: list[int], cands: list[tuple[np.ndarray, np.ndarray]]) -> None:
-        nbat = len(piv)
-        rows = np.repeat(np.arange(nbat), [len(b) for b, _ in cands])
-        bb = np.concatenate([b for b, _ in cands])
-        ee = np.concatenate([e for _, e in cands])
-        if bb.size == 0:
-            return
-        A = vn[np.asarray(piv)]
-        pa = X[A]
-        bpd = pb[None, :, :] - pa[:, None, :]  # (nbat, m, 2) dense pivot × mover
-        rd = np.hypot(bpd[..., 0], bpd[..., 1])
-        thd = np.arctan2(bpd[..., 1], bpd[..., 0])
-        enter_ccw, enter_cw = _enter_flags(bpd, rd, e1[None], e0[None], beta[None], tol)
-
-        pac = pa[rows]
-        rr = rd[rows, bb]
-        Pc = P[ee] - pac
-        Dc = D[ee]
-        Lc = Ld[ee]
-        sp_ = bd.seg_p[ee]
-        sq_ = bd.seg_q[ee]
-        bpc = bpd[rows, bb]
-        mover = vn[bb]
-        s, v_root = _circle_segment_roots(Pc, Dc, Lc, L2[ee], rr, bpc, sp_ == mover,
-                                          sq_ == mover, tol)
-        eps = (tol / Lc)[:, None]
-        v_root &= (s >= -eps) & (s <= 1.0 + eps)
-        s = np.clip(s, 0.0, 1.0)
-        Xr = Pc[:, None, :] + s[..., None] * Dc[:, None, :]
-        sl = s * Lc[:, None]
-        node_r = np.where(sl <= tol, sp_[:, None],
-                          np.where(Lc[:, None] - sl <= tol, sq_[:, None], -1))
-        # Nodes lying on the circle within tol are hits too (arc through a node).
-        Qc = Pc + Dc
-        v_end = np.stack([np.abs(np.hypot(Pc[:, 0], Pc[:, 1]) - rr) <= tol,
-                          np.abs(np.hypot(Qc[:, 0], Qc[:, 1]) - rr) <= tol], axis=1)
-        Xh = np.concatenate([Xr, np.stack([Pc, Qc], axis=1)], axis=1)  # (K, 4, 2), rel. a
-        valid = np.concatenate([v_root, v_end], axis=1)
-        node = np.concatenate([node_r, np.stack([sp_, sq_], axis=1)], axis=1)
-        # Ignore the start point b itself (node b, and meetings within tol of it).
-        near_b = np.hypot(Xh[..., 0] - bpc[:, None, 0], Xh[..., 1] - bpc[:, None, 1]) <= tol
-        valid &= ~near_b & (node != mover[:, None])
-        dth = np.arctan2(Xh[..., 1], Xh[..., 0]) - thd[rows, bb][:, None]
-
-        key = rows * m + bb
-        for direction, (phi, enter) in enumerate(((np.mod(dth, _TWO_PI), enter_ccw),
-                                                  (np.mod(-dth, _TWO_PI), enter_cw))):
-            ph = np.where(valid, phi, np.inf)
-            gmin = np.full(nbat * m, np.inf)
-            np.minimum.at(gmin, key, ph.min(axis=1))
-            gmin[enter.ravel()] = np.inf  # first motion enters the part: skipped
-            gk = gmin[key]
-            with np.errstate(invalid="ignore"):
-                first = (valid & np.isfinite(gk)[:, None]
-                         & (rr[:, None] * (ph - gk[:, None]) <= tol))
-            kr, kh = np.nonzero(first)
-            nd = node[kr, kh]
-            isn = nd >= 0
-            # Hit at (within tol of) a node c: the arc meets every edge there.
-            rn = kr[isn]
-            cn = nd[isn]
-            # Hit inside an edge (crossing or tangential touch): both its end nodes.
-            re_ = kr[~isn]
-            krow = np.concatenate([rn, rn, rn, re_, re_])
-            out_a.append(A[rows[krow]])
-            out_b.append(vn[bb[krow]])
-            out_c.append(np.concatenate([cn, bd.prev_of[cn], bd.next_of[cn],
-                                         sp_[re_], sq_[re_]]))
-            out_d.append(np.full(krow.size, direction, dtype=np.int64))
-
+    ed = _SwingEdges(bd)
+    m = len(bd.vn)
+    out: list[tuple[np.ndarray, ...]] = []
     piv: list[int] = []
     cands: list[tuple[np.ndarray, np.ndarray]] = []
     total = 0
     for ia in (range(m) if pivots is None else (int(x) for x in pivots)):
-        b, e = _swing_candidates(bd, ia, P, D, L2, margin)
+        b, e = _swing_candidates(bd, ia, ed.P, ed.D, ed.L2, ed.margin)
         if mover is not None:
             sel = b == mover
             b, e = b[sel], e[sel]
@@ -747,20 +774,16 @@ def _swing_triples(bd: _Boundary, pivots: np.ndarray | None = None,
         cands.append((b, e))
         total += b.size
         if total >= _CANDIDATES_PER_BATCH or len(piv) * m >= _CANDIDATES_PER_BATCH:
-            process(piv, cands)
+            out += _swing_batch(bd, ed, piv, cands)
             piv, cands, total = [], [], 0
     if piv:
-        process(piv, cands)
-    if not out_a:
+        out += _swing_batch(bd, ed, piv, cands)
+    if not out:
         z = np.zeros(0, dtype=np.int64)
         return z, z, z, z
-    a = np.concatenate(out_a)
-    b = np.concatenate(out_b)
-    c = np.concatenate(out_c)
-    d = np.concatenate(out_d)
+    a, b, c, d = (np.concatenate(x) for x in zip(*out))
     keep = (bd.local[c] >= 0) & (c != a) & (c != b)
     return a[keep], b[keep], c[keep], d[keep]
-
 
 
 def contact_graph(nodes: np.ndarray, loops: Sequence[np.ndarray],
@@ -779,7 +802,8 @@ def contact_graph(nodes: np.ndarray, loops: Sequence[np.ndarray],
         Loops whose nodes form the vertex pairs: ``(0,)`` for contracting grasps (jaws
         squeeze the outer boundary), all loops for expanding grasps.
     tol : float, optional
-        Touching tolerance (m); default ``1e-9 ×`` the part's diameter.
+        Touching tolerance (m); default the SPEC's, ``1e-9 ×`` the part's diameter
+        (:func:`deformclosure.geometry.touch_tolerance`).
 
     Returns
     -------
@@ -833,18 +857,22 @@ def contact_graph(nodes: np.ndarray, loops: Sequence[np.ndarray],
     .. [1] Gopalakrishnan & Goldberg (2005), §4.3–4.4; SPEC §4 "Contact graph".
     """
     bd = _Boundary(nodes, loops, vertex_loops, tol)
-    m = len(bd.vn)
-    ii, jj = np.triu_indices(m, 1)
+    ii, jj = np.triu_indices(len(bd.vn), 1)
     pairs = np.stack([bd.vn[ii], bd.vn[jj]], axis=1).astype(np.int64)
+    return ContactGraph.from_edges(pairs, *_rule_edges(bd))
 
+
+def _rule_edges(bd: _Boundary) -> tuple[np.ndarray, np.ndarray]:
+    """Edges ``{a, b} -- {a, c}`` of the slide and swing rules as vertex-index pairs in
+    triu order, with their kind bits (repeats are merged by ``from_edges``)."""
+    m = len(bd.vn)
     us, vs, ks = [], [], []
     for kind, (a, b, c) in ((SLIDE, _slide_triples(bd)), (SWING, _swing_triples(bd)[:3])):
         la, lb, lc = bd.local[a], bd.local[b], bd.local[c]
         us.append(_pair_index(la, lb, m))
         vs.append(_pair_index(la, lc, m))
         ks.append(np.full(len(a), kind, dtype=np.uint8))
-    edges = np.stack([np.concatenate(us), np.concatenate(vs)], axis=1)
-    return ContactGraph.from_edges(pairs, edges, np.concatenate(ks))
+    return np.stack([np.concatenate(us), np.concatenate(vs)], axis=1), np.concatenate(ks)
 
 
 def swing_targets(nodes: np.ndarray, loops: Sequence[np.ndarray], a: int, b: int,

@@ -19,12 +19,55 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..choices import MODES, choose
 from ..elasticity.condense import CondensedCompliance
 from ..elasticity.strain import strain_magnitude
 from ..errors import GraspError
 from .pair_stiffness import jaw_pair_forces
 
-__all__ = ["ElasticLimit", "elastic_limit"]
+__all__ = ["ElasticLimit", "elastic_limit", "elastic_limit_separation"]
+
+
+def elastic_limit_separation(sigma0: float | np.ndarray, e_max: float | np.ndarray,
+                             elastic_limit_strain: float, mode: str = "contracting"
+                             ) -> float | np.ndarray:
+    """``σ_L`` (m): the jaw separation at which the largest strain reaches ``e_L`` (SPEC §4).
+
+    The one implementation of the formula, for one jaw pair (floats) or many (arrays):
+    the distance changes by ``e_L / e_max`` before the elastic limit, so
+    ``σ_L = max(0, σ0 − e_L/e_max)`` (contracting) or ``σ0 + e_L/e_max`` (expanding).
+
+    Parameters
+    ----------
+    sigma0 : float or ndarray
+        Rest distance of the jaw nodes (m).
+    e_max : float or ndarray
+        Largest strain magnitude per metre of jaw-distance change (1/m).
+    elastic_limit_strain : float
+        ``e_L`` (dimensionless).
+    mode : {"contracting", "expanding"}
+
+    Returns
+    -------
+    float or ndarray
+        Like ``sigma0``.
+
+    Examples
+    --------
+    >>> elastic_limit_separation(0.012, 100.0, 0.8)
+    0.004
+    >>> elastic_limit_separation(np.array([0.012, 0.006]), np.array([100.0, 100.0]), 0.8)
+    array([0.004, 0.   ])
+    >>> elastic_limit_separation(0.012, 100.0, 0.8, "expanding")
+    0.02
+    """
+    choose(mode, MODES, "mode", GraspError)
+    travel = elastic_limit_strain / e_max
+    if mode == "contracting":
+        sigma_L = np.maximum(0.0, sigma0 - travel)
+    else:
+        sigma_L = sigma0 + travel
+    return float(sigma_L) if np.ndim(sigma_L) == 0 else sigma_L
 
 
 @dataclass(frozen=True)
@@ -76,12 +119,15 @@ def elastic_limit(mesh, condensed: CondensedCompliance, n0: int, n1: int, *,
     elastic_limit_strain : float, optional
         ``e_L``; defaults to the mesh material's.
 
+    Returns
+    -------
+    ElasticLimit
+
     Raises
     ------
     GraspError
     """
-    if mode not in ("contracting", "expanding"):
-        raise GraspError(f"mode = {mode!r}: use 'contracting' or 'expanding'")
+    choose(mode, MODES, "mode", GraspError)
     eL = elastic_limit_strain
     if eL is None:
         if mesh.material is None:
@@ -96,6 +142,5 @@ def elastic_limit(mesh, condensed: CondensedCompliance, n0: int, n1: int, *,
     sigma0 = float(np.linalg.norm(mesh.nodes[b] - mesh.nodes[a]))
     if not e_max > 0:
         raise GraspError("the jaw pair produces no strain; check the mesh and stiffness")
-    travel = eL / e_max
-    sigma_L = max(0.0, sigma0 - travel) if mode == "contracting" else sigma0 + travel
+    sigma_L = elastic_limit_separation(sigma0, e_max, eL, mode)
     return ElasticLimit(k, sigma0, e_max, sigma_L, i, strain, u)

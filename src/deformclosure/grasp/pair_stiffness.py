@@ -25,12 +25,18 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..choices import choose
 from ..elasticity.condense import CondensedCompliance
 from ..errors import GraspError
+from ..geometry import touch_tolerance
 from .jaws import jaw_patches
 
 __all__ = ["PairStiffness", "pair_stiffness", "all_pairs", "pair_stiffness_paper",
-           "jaw_pair_forces"]
+           "jaw_pair_forces", "PAIR_METHODS"]
+
+#: How :func:`pair_stiffness` computes ``k_ab``: condensed compliance, or the paper's
+#: one Dirichlet solve per pair.
+PAIR_METHODS = ("schur", "paper")
 
 
 @dataclass(frozen=True)
@@ -103,11 +109,25 @@ def pair_stiffness(mesh, K: sp.spmatrix | None = None, pairs: np.ndarray | None 
     ------
     GraspError
         Unknown method, negative width, pair nodes not on the boundary.
+
+    Examples
+    --------
+    A coarse 12 × 20 mm rubber block: ``σ0`` and ``k_ab`` of every pair of its
+    outer-perimeter nodes, and the paper's Dirichlet solve agreeing on one pair:
+
+    >>> from deformclosure import demo_part, mesh_part
+    >>> mesh = mesh_part(demo_part(max_area_mm2=20.0))
+    >>> ps = pair_stiffness(mesh)
+    >>> p = len(mesh.outer_loop)
+    >>> len(ps.k) == p * (p - 1) // 2, bool(np.all(ps.k > 0))
+    (True, True)
+    >>> ref = pair_stiffness(mesh, pairs=ps.pairs[:1], method="paper").k[0]
+    >>> bool(np.isclose(ref, ps.k[0], rtol=1e-9))
+    True
     """
     from ..elasticity import stiffness_matrix
 
-    if method not in ("schur", "paper"):
-        raise GraspError(f"method = {method!r}: use 'schur' or 'paper'")
+    choose(method, PAIR_METHODS, "method", GraspError)
     if K is None:
         K = stiffness_matrix(mesh)
     loop_nodes = np.concatenate([mesh.loops[i] for i in loops])
@@ -142,6 +162,54 @@ def _point_compliance(cc: CondensedCompliance, pairs: np.ndarray, e: np.ndarray)
     return np.einsum("vi,vij,vj->v", e, M, e)
 
 
+def _disjoint_patches(mesh, pairs: np.ndarray, width: float
+                      ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Contact patches ``J_a``, ``J_b`` of the two jaws of every pair; a node in both goes
+    to the nearer jaw."""
+    uniq = np.unique(pairs)
+    patches = dict(zip(uniq.tolist(), jaw_patches(mesh.nodes, mesh.loops, uniq, width)))
+    sets_a, sets_b = [], []
+    for (a, b) in pairs.tolist():
+        Ja, Jb = patches[a], patches[b]
+        shared = np.intersect1d(Ja, Jb)
+        if len(shared):
+            da = np.linalg.norm(mesh.nodes[shared] - mesh.nodes[a], axis=1)
+            db = np.linalg.norm(mesh.nodes[shared] - mesh.nodes[b], axis=1)
+            to_b = shared[db < da]
+            to_a = shared[db >= da]
+            Ja = Ja[~np.isin(Ja, to_b)]
+            Jb = Jb[~np.isin(Jb, to_a)]
+        sets_a.append(Ja)
+        sets_b.append(Jb)
+    return sets_a, sets_b
+
+
+def _patch_system(G: np.ndarray, rho: np.ndarray, ma: int, mb: int, flat_tol: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The stacked systems ``A x = rhs`` of :func:`_wide_jaw_stiffness` for ``B`` pairs
+    with patches of ``ma`` and ``mb`` nodes (``G``: ``(B, m, m)``, ``rho``: ``(B, m)``)."""
+    m = ma + mb
+    B = len(G)
+    A = np.zeros((B, m + 3, m + 3))
+    rhs = np.zeros((B, m + 3))
+    A[:, :m, :m] = G
+    A[:, :m, m] = rho
+    A[:, :m, m + 1] = -np.concatenate([np.ones(ma), np.zeros(mb)])
+    A[:, :m, m + 2] = -np.concatenate([np.zeros(ma), np.ones(mb)])
+    A[:, m, :m] = 1.0
+    A[:, m + 1, :m] = rho
+    A[:, m + 2, m + 1] = -1.0
+    A[:, m + 2, m + 2] = 1.0
+    rhs[:, m + 2] = -1.0
+    # Patches with no lever-arm spread (all nodes on the jaw line, within the touching
+    # tolerance) cannot transmit a moment: drop the moment equation and fix ω = 0 there.
+    flat = np.ptp(rho, axis=1) <= flat_tol
+    A[flat, m + 1, :] = 0.0
+    A[flat, :, m] = 0.0
+    A[flat, m + 1, m] = 1.0
+    return A, rhs
+
+
 def _wide_jaw_stiffness(mesh, cc: CondensedCompliance, pairs: np.ndarray, e: np.ndarray,
                         width: float) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
     """Stiffness of flat frictionless jaws of ``width`` for all pairs.
@@ -160,34 +228,18 @@ def _wide_jaw_stiffness(mesh, cc: CondensedCompliance, pairs: np.ndarray, e: np.
     forces : list of ndarray
         Normal forces λ (N per m of approach) on those nodes.
     """
-    uniq = np.unique(pairs)
-    patches = dict(zip(uniq.tolist(), jaw_patches(mesh.nodes, mesh.loops, uniq, width)))
     V = len(pairs)
-    # Patches of the two jaws must be disjoint: a shared node goes to the nearer jaw.
-    sets_a, sets_b = [], []
-    for (a, b) in pairs.tolist():
-        Ja, Jb = patches[a], patches[b]
-        shared = np.intersect1d(Ja, Jb)
-        if len(shared):
-            da = np.linalg.norm(mesh.nodes[shared] - mesh.nodes[a], axis=1)
-            db = np.linalg.norm(mesh.nodes[shared] - mesh.nodes[b], axis=1)
-            to_b = shared[db < da]
-            to_a = shared[db >= da]
-            Ja = Ja[~np.isin(Ja, to_b)]
-            Jb = Jb[~np.isin(Jb, to_a)]
-        sets_a.append(Ja)
-        sets_b.append(Jb)
+    sets_a, sets_b = _disjoint_patches(mesh, pairs, width)
     sizes = np.array([[len(x), len(y)] for x, y in zip(sets_a, sets_b)])
     k = np.empty(V)
     node_sets: list[np.ndarray] = [None] * V  # type: ignore[list-item]
     forces: list[np.ndarray] = [None] * V  # type: ignore[list-item]
     Cn = cc.C.reshape(len(cc.boundary), 2, len(cc.boundary), 2)
-    diam = float(np.ptp(mesh.nodes, axis=0).max())
+    flat_tol = touch_tolerance(mesh.diameter)
     # Batch the pairs by patch sizes: one stacked linear solve per group.
     keys, inv = np.unique(sizes, axis=0, return_inverse=True)
     for g, (ma, mb) in enumerate(keys):
         idx = np.flatnonzero(inv.ravel() == g)
-        m = ma + mb
         J = np.array([np.concatenate([sets_a[i], sets_b[i]]) for i in idx])   # (B, m)
         P = cc.position(J)
         if np.any(P < 0):
@@ -197,26 +249,8 @@ def _wide_jaw_stiffness(mesh, cc: CondensedCompliance, pairs: np.ndarray, e: np.
         G = np.einsum("bi,bpqij,bj->bpq", eg, Cblk, eg)
         xy = mesh.nodes[J] - mesh.nodes[J].mean(axis=1, keepdims=True)
         rho = xy[..., 0] * eg[:, None, 1] - xy[..., 1] * eg[:, None, 0]       # (B, m)
-        B = len(idx)
-        A = np.zeros((B, m + 3, m + 3))
-        rhs = np.zeros((B, m + 3))
-        A[:, :m, :m] = G
-        A[:, :m, m] = rho
-        A[:, :m, m + 1] = -np.concatenate([np.ones(ma), np.zeros(mb)])
-        A[:, :m, m + 2] = -np.concatenate([np.zeros(ma), np.ones(mb)])
-        A[:, m, :m] = 1.0
-        A[:, m + 1, :m] = rho
-        A[:, m + 2, m + 1] = -1.0
-        A[:, m + 2, m + 2] = 1.0
-        rhs[:, m + 2] = -1.0
-        # Patches with no lever-arm spread (all nodes on the jaw line) cannot transmit a
-        # moment: drop the moment equation and fix ω = 0 there.
-        flat = np.ptp(rho, axis=1) <= 1e-9 * diam
-        A[flat, m + 1, :] = 0.0
-        A[flat, :, m] = 0.0
-        A[flat, m + 1, m] = 1.0
-        x = np.linalg.solve(A, rhs[..., None])[..., 0]
-        lam = x[:, :m]
+        A, rhs = _patch_system(G, rho, ma, mb, flat_tol)
+        lam = np.linalg.solve(A, rhs[..., None])[..., 0][:, :ma + mb]
         k[idx] = -lam[:, ma:].sum(axis=1)
         for r, i in enumerate(idx):
             node_sets[i] = J[r]

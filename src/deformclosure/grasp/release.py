@@ -81,6 +81,14 @@ def _neighbour_min(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
     return out
 
 
+def _below_neighbours(U: Any, graph: ContactGraph, strict: bool) -> np.ndarray:
+    """``U[v] < U[w]`` (``strict``) or ``U[v] <= U[w]`` for every neighbour ``w``, per vertex
+    (true for isolated vertices: the condition is vacuous)."""
+    U = _check_energies(U, graph)
+    nmin = _neighbour_min(U, graph)
+    return U < nmin if strict else U <= nmin
+
+
 def equilibrium_mask(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
     """Equilibrium vertices: ``U[v] <= U[w]`` for every neighbour ``w`` (SPEC §4).
 
@@ -100,25 +108,19 @@ def equilibrium_mask(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
     GraspError
         If ``U`` has the wrong length or non-finite values.
     """
-    U = _check_energies(U, graph)
-    return U <= _neighbour_min(U, graph)
+    return _below_neighbours(U, graph, strict=False)
 
 
 def strict_minimum_mask(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
-    """Strict local minima: ``U[v] < U[w]`` for every neighbour ``w``.
+    """Strict local minima: ``U[v] < U[w]`` for every neighbour ``w``; arguments, result
+    and errors as :func:`equilibrium_mask`."""
+    return _below_neighbours(U, graph, strict=True)
 
-    Parameters
-    ----------
-    U : array_like, shape (V,)
-        Energy of every vertex (J).
-    graph : ContactGraph
 
-    Returns
-    -------
-    ndarray of bool, shape (V,)
-    """
-    U = _check_energies(U, graph)
-    return U < _neighbour_min(U, graph)
+def _is_strict_at(U: np.ndarray, graph: ContactGraph, v: int) -> bool:
+    """Whether vertex ``v`` is below all its neighbours (checked ``U``, index ``v``)."""
+    nb = graph.indices[graph.indptr[v]:graph.indptr[v + 1]]
+    return bool(np.all(U[v] < U[nb]))
 
 
 def is_strict_minimum(U: np.ndarray, graph: ContactGraph, v: int) -> bool:
@@ -138,9 +140,7 @@ def is_strict_minimum(U: np.ndarray, graph: ContactGraph, v: int) -> bool:
         ``U[v] < U[w]`` for every neighbour ``w`` (true for an isolated vertex).
     """
     U = _check_energies(U, graph)
-    v = _check_vertex(graph, v)
-    nb = graph.indices[graph.indptr[v]:graph.indptr[v + 1]]
-    return bool(np.all(U[v] < U[nb]))
+    return _is_strict_at(U, graph, _check_vertex(graph, v))
 
 
 @dataclass(frozen=True, eq=False)
@@ -250,8 +250,7 @@ def release_energy(U: np.ndarray, graph: ContactGraph, start: int) -> Release:
     """
     U = _check_energies(U, graph)
     s = _check_vertex(graph, start)
-    nb = graph.indices[graph.indptr[s]:graph.indptr[s + 1]]
-    if not np.all(U[s] < U[nb]):
+    if not _is_strict_at(U, graph, s):
         return Release(0.0, None, None, None, False, s)
     path = _kernels.bottleneck_escape(graph.indptr, graph.indices, U, np.int64(s))
     if path.size == 0:
@@ -286,6 +285,16 @@ def release_energies(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
     ------
     GraspError
         If ``U`` has the wrong length or non-finite values.
+
+    Examples
+    --------
+    On the path ``0 – 1 – 2`` with energies ``(0, 2, 1)`` J, vertex 0 escapes over the
+    saddle 1 to the equilibrium 2; vertex 2 would climb 1 J to reach 0:
+
+    >>> from deformclosure.grasp.contact_graph import ContactGraph
+    >>> g = ContactGraph.from_edges([[0, 1], [0, 2], [1, 2]], [[0, 1], [1, 2]])
+    >>> release_energies(np.array([0.0, 2.0, 1.0]), g)
+    array([2., 0., 1.])
     """
     U = _check_energies(U, graph)
     nmin = _kernels.neighbour_min(graph.indptr, graph.indices, U)

@@ -69,6 +69,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
+from ..choices import METHODS, MODES, choose
 from ..errors import GraspError
 from . import pieces as pc
 from .release import release_energy
@@ -82,12 +83,10 @@ __all__ = [
     "lipschitz_constant",
     "quality_at",
     "vertex_energies",
-    "METHODS",
-    "MODES",
 ]
 
-METHODS = ("exact", "paper", "approx")
-MODES = ("contracting", "expanding")
+#: Sample grids of ``method="approx"`` (:func:`_approx`).
+GRIDS = ("pieces", "lattice")
 
 _UNITS = {"length": "m", "energy": "J", "stiffness": "N/m", "strain_per_length": "1/m"}
 
@@ -245,8 +244,7 @@ def vertex_energies(sigma: float | np.ndarray, sigma0: np.ndarray, k: np.ndarray
     >>> vertex_energies(0.5, np.array([1.0, 0.2]), np.array([2.0, 2.0]), "expanding")
     array([0.  , 0.09])
     """
-    if mode not in MODES:
-        raise GraspError(f"mode must be one of {MODES}, got {mode!r}")
+    choose(mode, MODES, "mode", GraspError)
     sign = 1.0 if mode == "contracting" else -1.0
     return pc.energies(sign * np.asarray(sigma, dtype=float), sign * np.asarray(sigma0, float),
                        np.asarray(k, float))
@@ -336,8 +334,7 @@ def _as_vector(name: str, a, V: int | None = None) -> np.ndarray:
 
 
 def _validate(sigma0, k, graph, start, sigma_L, mode) -> _Problem:
-    if mode not in MODES:
-        raise GraspError(f"mode must be one of {MODES}, got {mode!r}")
+    choose(mode, MODES, "mode", GraspError)
     pairs = getattr(graph, "pairs", None)
     if pairs is None or getattr(graph, "edges", None) is None:
         raise GraspError("graph must be a ContactGraph (with .pairs and .edges)")
@@ -477,90 +474,109 @@ def _sweep_exact(P: _Problem) -> tuple[list[pc.Breakpoint], list[_Eval], list[_P
     one quadratic on the whole range), so they are not visited; the test suite checks
     the result against the paper's all-crossings method.
     """
-    static = _static_breakpoints(P)
-    sx = static.x
-    memb_bp, memb_v = static.members()  # for the relevance filter below
-    involves_s = np.zeros(len(static), dtype=bool)
-    gp = np.repeat(np.arange(len(static)), np.diff(static.pair_ptr))
-    involves_s[gp[np.any(static.pairs == P.s, axis=1)]] = True
-    tol = P.tol_x
-    cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    return _ExactSweep(P).run()
 
-    def w_crossings(w: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+
+class _ExactSweep:
+    """State of :func:`_sweep_exact`: the static events, the breakpoints visited with
+    their evaluations, and the pieces found."""
+
+    def __init__(self, P: _Problem) -> None:
+        self.P = P
+        self.static = static = _static_breakpoints(P)
+        self.sx = static.x
+        self.memb_bp, self.memb_v = static.members()  # for the relevance filter
+        self.involves_s = np.zeros(len(static), dtype=bool)
+        gp = np.repeat(np.arange(len(static)), np.diff(static.pair_ptr))
+        self.involves_s[gp[np.any(static.pairs == P.s, axis=1)]] = True
+        self.tol = P.tol_x
+        self._w_cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        first, last = static.breakpoint(0), static.breakpoint(len(static) - 1)
+        self.bps: list[pc.Breakpoint] = [first, last]
+        self.evals: list[_Eval] = [P.eval_bp(first), P.eval_bp(last)]
+        self.pieces: list[_Piece] = []
+
+    def w_crossings(self, w: int, a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
         """Crossings of U_w with every curve in (a, b); all of them computed once per w."""
-        if w not in cache:
-            cache[w] = pc.curve_crossings(w, P.x0, P.k, P.lo, P.hi)
-        xs, vs = cache[w]
+        if w not in self._w_cache:
+            self._w_cache[w] = pc.curve_crossings(w, self.P.x0, self.P.k, self.P.lo, self.P.hi)
+        xs, vs = self._w_cache[w]
         i, j = np.searchsorted(xs, [a, b], side="right")
         return xs[i:j], vs[i:j]
 
-    first, last = static.breakpoint(0), static.breakpoint(len(static) - 1)
-    bps: list[pc.Breakpoint] = [first, last]
-    evals: list[_Eval] = [P.eval_bp(first), P.eval_bp(last)]
-    pieces: list[_Piece] = []
-
-    def make_bp(x: float, st_idx: np.ndarray, dx: np.ndarray, dpairs: np.ndarray) -> pc.Breakpoint:
-        """Breakpoint at ``x`` merging the static and dynamic events within ``tol``."""
-        near_s = st_idx[np.abs(sx[st_idx] - x) <= tol]
-        near_d = np.abs(dx - x) <= tol
-        pairs = [dpairs[near_d]] + [static.breakpoint(i).pairs for i in near_s]
-        kinks = [np.empty(0, np.int64)] + [static.breakpoint(i).kinks for i in near_s]
-        pos = float(sx[near_s[0]]) if near_s.size else float(x)
-        return pc.Breakpoint(pos, np.concatenate(pairs).reshape(-1, 2), np.concatenate(kinks),
-                             static=bool(near_s.size))
-
-    stack = [(P.lo, P.hi)]
-    while stack:
-        a, b = stack.pop()
-        m = 0.5 * (a + b)
-        U = pc.energies(m, P.x0, P.k)
-        rel = P.release(U)
-        kind, w, _ = P.classify(rel)
-        if b - a <= 4 * tol:
-            pieces.append(_Piece(a, b, kind, w, rel))
-            continue
+    def events(self, a: float, b: float, U: np.ndarray, kind: str, w: int | None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Events in ``(a, b)`` that can end the piece of the saddle ``w``: indices of
+        relevant static breakpoints, and crossings of ``U_w`` (positions, vertex pairs)."""
+        tol, sx = self.tol, self.sx
         i0 = int(np.searchsorted(sx, a + tol, side="right"))
         i1 = int(np.searchsorted(sx, b - tol, side="left"))
         st_idx = np.arange(i0, i1)
         dx = np.empty(0)
         dpairs = np.empty((0, 2), dtype=np.int64)
-        if kind == "zero":
-            st_idx = st_idx[involves_s[i0:i1]]
-        elif kind == "finite":
-            j0, j1 = np.searchsorted(memb_bp, [i0, i1])
+        if kind == "zero":               # only the start's crossings with its neighbours
+            st_idx = st_idx[self.involves_s[i0:i1]]
+        elif kind == "finite":           # adjacent crossings at or below U_w, and U_w's own
+            j0, j1 = np.searchsorted(self.memb_bp, [i0, i1])
             A = U <= U[w]
-            st_idx = np.unique(memb_bp[j0:j1][A[memb_v[j0:j1]]])
-            dx, dv = w_crossings(w, a + tol, b - tol)
+            st_idx = np.unique(self.memb_bp[j0:j1][A[self.memb_v[j0:j1]]])
+            dx, dv = self.w_crossings(w, a + tol, b - tol)
             dpairs = np.stack([np.full(dv.size, w), dv], axis=1).astype(np.int64)
-        ev = np.concatenate([sx[st_idx], dx])
+        return st_idx, dx, dpairs
+
+    def add_breakpoint(self, x: float, st_idx: np.ndarray, dx: np.ndarray,
+                       dpairs: np.ndarray) -> float:
+        """Visit the breakpoint at ``x`` (static and dynamic events within ``tol``
+        merged), evaluate ``U_A`` there by definition; returns its position."""
+        static, sx, tol = self.static, self.sx, self.tol
+        near_s = st_idx[np.abs(sx[st_idx] - x) <= tol]
+        near_d = np.abs(dx - x) <= tol
+        pairs = [dpairs[near_d]] + [static.breakpoint(i).pairs for i in near_s]
+        kinks = [np.empty(0, np.int64)] + [static.breakpoint(i).kinks for i in near_s]
+        pos = float(sx[near_s[0]]) if near_s.size else float(x)
+        bp = pc.Breakpoint(pos, np.concatenate(pairs).reshape(-1, 2), np.concatenate(kinks),
+                           static=bool(near_s.size))
+        self.bps.append(bp)
+        self.evals.append(self.P.eval_bp(bp))
+        return bp.x
+
+    def step(self, a: float, b: float) -> list[tuple[float, float]]:
+        """Probe the middle of ``(a, b)``; record the piece around it and its ending
+        breakpoints; return the intervals left to sweep."""
+        P, tol = self.P, self.tol
+        m = 0.5 * (a + b)
+        U = pc.energies(m, P.x0, P.k)
+        rel = P.release(U)
+        kind, w, _ = P.classify(rel)
+        if b - a <= 4 * tol:
+            self.pieces.append(_Piece(a, b, kind, w, rel))
+            return []
+        st_idx, dx, dpairs = self.events(a, b, U, kind, w)
+        ev = np.concatenate([self.sx[st_idx], dx])
         if ev.size == 0:
-            pieces.append(_Piece(a, b, kind, w, rel))
-            continue
+            self.pieces.append(_Piece(a, b, kind, w, rel))
+            return []
         if np.any(np.abs(ev - m) <= tol):
             # The probe sits on an event: the saddle may be valid on one side only.
-            bp = make_bp(float(ev[np.argmin(np.abs(ev - m))]), st_idx, dx, dpairs)
-            bps.append(bp)
-            evals.append(P.eval_bp(bp))
-            stack += [(bp.x, b), (a, bp.x)]
-            continue
+            x = self.add_breakpoint(float(ev[np.argmin(np.abs(ev - m))]), st_idx, dx, dpairs)
+            return [(x, b), (a, x)]
         left_e, right_e = ev[ev < m], ev[ev > m]
         left, right = a, b
         todo = []
         if right_e.size:
-            bp = make_bp(float(right_e.min()), st_idx, dx, dpairs)
-            bps.append(bp)
-            evals.append(P.eval_bp(bp))
-            right = bp.x
+            right = self.add_breakpoint(float(right_e.min()), st_idx, dx, dpairs)
             todo.append((right, b))
         if left_e.size:
-            bp = make_bp(float(left_e.max()), st_idx, dx, dpairs)
-            bps.append(bp)
-            evals.append(P.eval_bp(bp))
-            left = bp.x
+            left = self.add_breakpoint(float(left_e.max()), st_idx, dx, dpairs)
             todo.append((a, left))
-        pieces.append(_Piece(left, right, kind, w, rel))
-        stack += todo
-    return bps, evals, pieces
+        self.pieces.append(_Piece(left, right, kind, w, rel))
+        return todo
+
+    def run(self) -> tuple[list[pc.Breakpoint], list[_Eval], list[_Piece]]:
+        stack = [(self.P.lo, self.P.hi)]
+        while stack:
+            stack += self.step(*stack.pop())
+        return self.bps, self.evals, self.pieces
 
 
 def _sweep_paper(P: _Problem, max_breakpoints: int):
@@ -732,103 +748,83 @@ def optimize_separation_arrays(
     sigma_L: float,
     *,
     mode: Literal["contracting", "expanding"] = "contracting",
-    method: Literal["exact", "paper", "approx"] = "exact",
+    method: Literal["exact", "approx", "paper"] = "exact",
     eps: float | None = None,
     e_max: float | None = None,
     grid: Literal["pieces", "lattice"] = "pieces",
     lipschitz: float | None = None,
-    max_breakpoints: int = 20_000,
-    max_samples: int = 200_000,
-    n_curve: int = 400,
+    max_breakpoints: int = 20_000, max_samples: int = 200_000, n_curve: int = 400,
 ) -> SeparationResult:
     """Optimal jaw separation ``σ* = argmax min(U_A, U_L)`` (paper §4.5–4.7, SPEC §4).
 
     Parameters
     ----------
-    sigma0 : ndarray, shape (V,)
-        Rest distance of every contact-graph vertex (m).
-    k : ndarray, shape (V,)
-        Pair stiffness of every vertex (N/m), positive.
+    sigma0, k : ndarray, shape (V,)
+        Rest distance (m) and pair stiffness (N/m, positive) of every contact-graph vertex.
     graph : ContactGraph
         Contact graph whose vertex ``i`` is the pair with ``sigma0[i]``, ``k[i]``.
     start : int or (int, int)
         Vertex index of the jaw pair ``{n0, n1}``, or the node pair itself.
     sigma_L : float
-        Elastic-limit separation (m): ``0 ≤ σ_L ≤ σ0_s`` contracting (the caller clamps
-        at 0), ``σ_L ≥ σ0_s`` expanding.
+        Elastic-limit separation (m): ``0 ≤ σ_L ≤ σ0_s`` contracting, ``≥ σ0_s`` expanding.
     mode : {"contracting", "expanding"}
-        Whether the jaws squeeze the pair together or apart.
-    method : {"exact", "paper", "approx"}
-        ``"exact"`` (default): sweep visiting only the breakpoints that can change
-        ``U_A`` (adjacent-vertex crossings, kinks, and crossings of the current saddle's
-        or the start's curve, found on the fly), closed-form maximisation per piece.
-        ``"paper"``: the paper's reference method, all O(V²) pairwise crossings as
-        breakpoints (small parts only; see ``max_breakpoints``).  ``"approx"``: the
-        ε-approximation of paper §4.7, ``Q* − Q(σ_ε) ≤ ε``.
-    eps : float, optional
-        ε (J) for ``method="approx"`` (required there); must be finite and positive.
-    e_max : float, optional
-        Strain per unit jaw displacement (1/m); only recorded in the result.
+    method : {"exact", "approx", "paper"}
+        ``"exact"``: the sweep of :func:`_sweep_exact`; ``"paper"``: every pairwise
+        crossing (reference, small parts; ``max_breakpoints``); ``"approx"``: the
+        ε-approximation of §4.7, ``Q* − Q(σ_ε) ≤ ε`` (see the module docstring).
+    eps, e_max : float, optional
+        ε (J), required by ``"approx"``; strain per unit jaw displacement (1/m), recorded.
     grid : {"pieces", "lattice"}
-        Samples of ``method="approx"``: ``"pieces"`` (default) cells of length ≤ ξ in
-        every interval between the separations where ``U_A`` can jump, which keeps the
-        ε guarantee; ``"lattice"`` the paper's plain grid ``σ_j = j·ξ`` (shared by all
-        jaw pairs, as in planning), whose guarantee fails when the optimum lies on a
-        continuity piece shorter than ξ that holds no lattice point (see Notes).
+        Samples of ``"approx"``: cells ≤ ξ between the jumps of ``U_A``, or the paper's
+        lattice ``σ_j = j·ξ`` (no guarantee on pieces shorter than ξ; :func:`_approx`).
     lipschitz : float, optional
-        λ (N) to use instead of the default (e.g. one λ shared by all pairs of a part);
-        must bound the slope of every vertex energy over the range for the guarantee.
-    max_breakpoints : int
-        Largest number of breakpoints ``method="paper"`` accepts.
-    max_samples : int
-        Largest number of ``U_A`` evaluations ``method="approx"`` accepts.
+        λ (N) instead of :func:`lipschitz_constant` (e.g. one λ for all pairs of a part).
+    max_breakpoints, max_samples : int
+        Largest number of breakpoints (``"paper"``) / ``U_A`` evaluations (``"approx"``).
     n_curve : int
         Number of uniform samples in ``result.curve``.
 
     Returns
     -------
     SeparationResult
-        ``quality = sup Q`` with the conventions of the module docstring (jumps, ties,
-        ``Q ≡ 0``).
+        ``quality = sup Q`` (conventions: module docstring).
 
     Raises
     ------
     GraspError
-        Bad mode/method/eps, mismatched array lengths, ``start`` out of range,
-        ``sigma_L`` on the wrong side of ``sigma0[start]``, too many breakpoints/samples.
-
-    Notes
-    -----
-    The paper's ε-grid misses what its proof overlooked: ``U_A`` jumps, so ``Q`` is
-    λ-Lipschitz only between jumps.  ``grid="pieces"`` samples every continuity piece
-    (each one-sided limit within ξ/2 of a sample on its own side), so
-    ``Q* − Q(σ_ε) ≤ ε/2``.  ``λ`` of the approximation is ``max_v k_v σ0_v`` for contracting grasps (paper §4.7;
-    valid since ``0 ≤ σ``) and ``max_v k_v (σ_L − σ0_v)⁺`` for expanding ones, the
-    largest slope of any vertex energy over the range.
+        Bad options or arrays, ``sigma_L`` on the wrong side of ``sigma0[start]``, too
+        many breakpoints/samples.
 
     Examples
     --------
-    A path graph ``0 – 1 – 2`` (vertex ``i`` is node pair ``pairs[i]``) where vertex 2
-    is always an equilibrium and vertex 1 always the saddle, so
-    ``U_A = U_1 − U_0``; with equal stiffness ``k``, ``σ_L = 0``, ``a = σ0_0`` and
-    ``c = σ0_1`` (``a ≤ c ≤ 2a``) the optimum is ``σ* = c − a``,
-    ``Q* = ½ k (c − a)(3a − c)``:
+    Path graph ``0 – 1 – 2``, vertex 1 the saddle, so ``U_A = U_1 − U_0``; ``k = 1``,
+    ``σ_L = 0``, ``σ0 = (a, c, ·)``: ``σ* = c − a``, ``Q* = ½ (c − a)(3a − c)``:
 
     >>> from deformclosure.grasp.contact_graph import ContactGraph
     >>> g = ContactGraph.from_edges([[0, 1], [0, 2], [1, 2]], [[0, 1], [1, 2]])
     >>> r = optimize_separation_arrays([1.0, 1.2, 0.1], [1.0, 1.0, 1.0], g, 0, 0.0)
     >>> round(r.sigma_star, 12), round(r.quality, 12), r.escape_path.tolist()
     (0.2, 0.18, [0, 1, 2])
-
-    With no other equilibrium reachable, ``U_A = ∞`` and ``Q = U_L``:
-
-    >>> g2 = ContactGraph.from_edges([[0, 1], [0, 2]], [[0, 1]])
-    >>> r = optimize_separation_arrays([1.0, 2.0], [1.0, 1.0], g2, 0, 0.0)
-    >>> r.sigma_star, r.quality, r.U_A, r.U_A_infinite
-    (1.0, 0.5, None, True)
     """
-    if method not in METHODS:
-        raise GraspError(f"method must be one of {METHODS}, got {method!r}")
+    eps = _checked_options(method, eps, e_max, grid, lipschitz, max_breakpoints, max_samples)
+    P = _validate(sigma0, k, graph, start, sigma_L, mode)
+    common = dict(sigma_L=float(sigma_L), sigma0=float(np.asarray(sigma0, dtype=float)[P.s]),
+                  k01=float(P.k[P.s]), method=method, epsilon=eps if method == "approx" else None,
+                  mode=mode, e_max=None if e_max is None else float(e_max))
+    if P.hi - P.lo <= 4 * P.tol_x:  # degenerate range: Q ≡ 0
+        return SeparationResult(None, 0.0, 0.0, False, 0.0, n_evaluations=0, n_breakpoints=0,
+                                jumps=[], saddle=None, escape_path=None,
+                                curve={"sigma": [], "U_A": [], "U_L": [], "Q": []},
+                                attained=False, n_pieces=0, **common)
+    sol = _solve(P, method, eps, lipschitz, np.asarray(sigma0, dtype=float), float(sigma_L),
+                 mode, int(max_breakpoints), int(max_samples), grid, n_curve)
+    return _result(P, sol, common)
+
+
+def _checked_options(method, eps, e_max, grid, lipschitz, max_breakpoints, max_samples
+                     ) -> float | None:
+    """Refuse bad options of :func:`optimize_separation_arrays`; ``eps`` as a float."""
+    choose(method, METHODS, "method", GraspError)
     if eps is not None:
         try:
             eps = float(eps)
@@ -840,61 +836,68 @@ def optimize_separation_arrays(
         raise GraspError("method='approx' needs eps (J), the allowed loss of quality")
     if e_max is not None and not (math.isfinite(float(e_max)) and float(e_max) >= 0):
         raise GraspError(f"e_max must be finite and non-negative (1/m), got {e_max!r}")
-    if grid not in ("pieces", "lattice"):
-        raise GraspError(f"grid must be one of ('pieces', 'lattice'), got {grid!r}")
+    choose(grid, GRIDS, "grid", GraspError)
     if lipschitz is not None and not (isinstance(lipschitz, (int, float, np.floating))
                                       and math.isfinite(lipschitz) and lipschitz > 0):
         raise GraspError(f"lipschitz must be a finite positive slope (N), got {lipschitz!r}")
     if int(max_breakpoints) < 1 or int(max_samples) < 1:
         raise GraspError("max_breakpoints and max_samples must be positive")
-    P = _validate(sigma0, k, graph, start, sigma_L, mode)
-    sigma0_arr = np.asarray(sigma0, dtype=float)
-    s0 = float(sigma0_arr[P.s])
-    common = dict(sigma_L=float(sigma_L), sigma0=s0, k01=float(P.k[P.s]), method=method,
-                  epsilon=eps if method == "approx" else None, mode=mode,
-                  e_max=None if e_max is None else float(e_max))
-    sign = P.sign
+    return eps
 
-    if P.hi - P.lo <= 4 * P.tol_x:  # degenerate range: Q ≡ 0
-        return SeparationResult(None, 0.0, 0.0, False, 0.0, n_evaluations=0, n_breakpoints=0,
-                                jumps=[], saddle=None, escape_path=None,
-                                curve={"sigma": [], "U_A": [], "U_L": [], "Q": []},
-                                attained=False, n_pieces=0, **common)
 
-    lam = xi = None
+@dataclass
+class _Solution:
+    """What a method found: the best candidate (``None``: Q ≡ 0 on the samples), the jumps
+    of ``U_A`` (contracting frame), counts, the curve, and λ and ξ of ``"approx"``."""
+
+    best: _Cand | None
+    jumps_x: list
+    n_breakpoints: int
+    n_pieces: int
+    curve: dict
+    lam: float | None = None
+    xi: float | None = None
+
+
+def _solve(P: _Problem, method: str, eps: float | None, lipschitz: float | None,
+           sigma0: np.ndarray, sigma_L: float, mode: str, max_breakpoints: int,
+           max_samples: int, grid: str, n_curve: int) -> _Solution:
+    """Run ``method`` on the problem ``P`` (non-degenerate range)."""
     if method == "approx":
         lam = float(lipschitz) if lipschitz is not None else \
-            lipschitz_constant(sigma0_arr, P.k, float(sigma_L), mode)
-        ends, evals, xi, n_static = _approx(P, eps, lam, int(max_samples), grid)
+            lipschitz_constant(sigma0, P.k, sigma_L, mode)
+        ends, evals, xi, n_static = _approx(P, eps, lam, max_samples, grid)
         best = None
         for e in evals:
             c = _Cand(e.Q, e.x, True, e.UA, e.UL, e.release, e.w)
             if _better(c, best):
                 best = c
-        jumps_x: list = []
-        n_pieces = len(evals) - len(ends)
-        bps = [None] * n_static  # n_breakpoints: those that split the grid
-        curve = _curve_from_samples(P, evals, n_curve)
+        # n_breakpoints: those that split the grid; n_pieces: interior samples
+        return _Solution(best, [], n_static, len(evals) - len(ends),
+                         _curve_from_samples(P, evals, n_curve), lam, xi)
+    if method == "exact":
+        bps, evals, pieces = _sweep_exact(P)
     else:
-        if method == "exact":
-            bps, evals, pieces = _sweep_exact(P)
-        else:
-            bps, evals, pieces = _sweep_paper(P, int(max_breakpoints))
-        best, jumps_x, (bps, evals, pieces) = _maximise(P, bps, evals, pieces)
-        n_pieces = len(pieces)
-        curve = _curve_from_pieces(P, bps, evals, pieces, jumps_x, best, n_curve)
+        bps, evals, pieces = _sweep_paper(P, max_breakpoints)
+    best, jumps_x, (bps, evals, pieces) = _maximise(P, bps, evals, pieces)
+    curve = _curve_from_pieces(P, bps, evals, pieces, jumps_x, best, n_curve)
+    return _Solution(best, jumps_x, len(bps), len(pieces), curve)
 
+
+def _result(P: _Problem, sol: _Solution, common: dict) -> SeparationResult:
+    """The :class:`SeparationResult` of a solution, back in σ (m)."""
+    sign = P.sign
     # Jumps in σ order: for expanding grasps x = −σ reverses left and right.
     if sign > 0:
-        jumps = [(float(x), l, v, r) for x, l, v, r in jumps_x]
+        jumps = [(float(x), l, v, r) for x, l, v, r in sol.jumps_x]
     else:
-        jumps = [(float(-x), r, v, l) for x, l, v, r in reversed(jumps_x)]
-
+        jumps = [(float(-x), r, v, l) for x, l, v, r in reversed(sol.jumps_x)]
+    counts = dict(n_evaluations=P.n_eval, n_breakpoints=sol.n_breakpoints, jumps=jumps,
+                  curve=sol.curve, n_pieces=sol.n_pieces, lipschitz=sol.lam, step=sol.xi)
+    best = sol.best
     if best is None or not best.Q > 0.0:
-        return SeparationResult(None, 0.0, 0.0, False, 0.0, n_evaluations=P.n_eval,
-                                n_breakpoints=len(bps), jumps=jumps, saddle=None,
-                                escape_path=None, curve=curve, attained=False,
-                                n_pieces=n_pieces, lipschitz=lam, step=xi, **common)
+        return SeparationResult(None, 0.0, 0.0, False, 0.0, saddle=None, escape_path=None,
+                                attained=False, **counts, **common)
     rel = best.release
     saddle = best.w
     path = None
@@ -907,9 +910,8 @@ def optimize_separation_arrays(
     return SeparationResult(
         sigma_star=float(sign * best.x), quality=float(best.Q),
         U_A=None if UA_inf else float(best.UA), U_A_infinite=UA_inf, U_L=float(best.UL),
-        n_evaluations=P.n_eval, n_breakpoints=len(bps), jumps=jumps, saddle=saddle,
-        escape_path=path, curve=curve, attained=best.attained, n_pieces=n_pieces,
-        lipschitz=lam, step=xi, saddle_pair=saddle_pair, **common)
+        saddle=saddle, escape_path=path, attained=best.attained, saddle_pair=saddle_pair,
+        **counts, **common)
 
 
 def _curve_lists(P: _Problem, x, UA, UL, Q) -> dict:

@@ -18,97 +18,81 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import MeshError
-from ..part import Material
+from ..geometry import point_set_diameter
+from ..part import Material, check_coordinates
+from .topology import boundary_loops, directed_edges, triangle_areas
 
 __all__ = ["Mesh", "triangle_areas", "boundary_loops"]
 
-
-def triangle_areas(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Signed areas of triangles (m²), positive for counter-clockwise ones.
-
-    Parameters
-    ----------
-    nodes : ndarray, shape (n, 2)
-    triangles : ndarray, shape (m, 3)
-
-    Returns
-    -------
-    ndarray, shape (m,)
-    """
-    p = nodes[triangles]
-    d1 = p[:, 1] - p[:, 0]
-    d2 = p[:, 2] - p[:, 0]
-    return 0.5 * (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+# --------------------------------------------------------------------------- validation
+def _checked_nodes(nodes: np.ndarray) -> np.ndarray:
+    """``nodes`` as an ``(n, 2)`` float array of finite, bounded coordinates."""
+    nodes = np.asarray(nodes, dtype=float)
+    if nodes.ndim != 2 or nodes.shape[1] != 2 or len(nodes) < 3:
+        raise MeshError(f"nodes: expected an (n, 2) array with n >= 3, got shape {nodes.shape}")
+    return check_coordinates(nodes, "nodes", MeshError)
 
 
-def _directed_edges(triangles: np.ndarray) -> np.ndarray:
-    return np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+def _checked_triangles(triangles: np.ndarray, n: int) -> np.ndarray:
+    """``triangles`` as ``(m, 3)`` int64 ids of three distinct nodes, every node used."""
+    tri = np.asarray(triangles)
+    if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
+        raise MeshError(f"triangles: expected an (m, 3) array with m >= 1, got shape {tri.shape}")
+    if not np.issubdtype(tri.dtype, np.integer):
+        if not np.all(np.isfinite(tri)) or not np.all(tri == np.round(tri)):
+            raise MeshError("triangles: node ids must be integers")
+    tri = tri.astype(np.int64)
+    if tri.min() < 0 or tri.max() >= n:
+        raise MeshError(f"triangles: node ids must be in 0..{n - 1}")
+    repeats = (tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])
+    if np.any(repeats):
+        raise MeshError(f"triangles[{int(np.flatnonzero(repeats)[0])}]: repeats a node "
+                        "(degenerate triangle)")
+    used = np.zeros(n, bool)
+    used[tri.ravel()] = True
+    if not used.all():
+        raise MeshError(f"nodes[{int(np.flatnonzero(~used)[0])}]: node is used by no triangle; "
+                        "remove unused nodes")
+    return tri
 
 
-def boundary_loops(nodes: np.ndarray, triangles: np.ndarray) -> list[np.ndarray]:
-    """Recover ordered boundary loops of a valid counter-clockwise triangle mesh.
-
-    A directed edge ``(i, j)`` of a counter-clockwise triangle whose reverse ``(j, i)``
-    belongs to no triangle is a boundary edge with the interior on its left; chaining
-    them gives the loops in the orientation of the module docstring.
-
-    Returns
-    -------
-    list of ndarray
-        Outer loop first (largest positive signed area), then holes sorted by their
-        smallest node id. Each loop starts at its smallest node id.
-
-    Raises
-    ------
-    MeshError
-        If a boundary node has more than one outgoing boundary edge (the mesh touches
-        itself at a node) or the boundary is not a set of closed loops.
-    """
-    n = len(nodes)
-    e = _directed_edges(triangles)
-    key = e[:, 0] * n + e[:, 1]
-    rkey = e[:, 1] * n + e[:, 0]
-    is_bnd = ~np.isin(key, rkey)
-    be = e[is_bnd]
-    if len(be) == 0:
-        raise MeshError("triangles: mesh has no boundary; a planar part mesh must have one")
-    starts, counts = np.unique(be[:, 0], return_counts=True)
-    if np.any(counts > 1):
-        bad = int(starts[counts > 1][0])
-        raise MeshError(f"triangles: mesh boundary touches itself at node {bad} (non-manifold "
-                        "vertex); remesh so that every boundary node has two boundary neighbours")
-    succ = np.full(n, -1, dtype=np.int64)
-    succ[be[:, 0]] = be[:, 1]
-    if np.any(succ[be[:, 1]] < 0):
-        raise MeshError("triangles: mesh boundary is not closed; check for missing triangles")
-    # Cycles of the successor permutation restricted to boundary nodes.
-    g = sp.coo_matrix((np.ones(len(be)), (be[:, 0], be[:, 1])), shape=(n, n))
-    _, labels = connected_components(g, directed=True, connection="weak")
-    loops: list[np.ndarray] = []
-    for lab in np.unique(labels[be[:, 0]]):
-        members = np.flatnonzero((labels == lab))
-        start = int(members.min())
-        order = np.empty(len(members), dtype=np.int64)
-        # Walking a cycle is inherently sequential; it is O(p) once per mesh.
-        cur = start
-        for i in range(len(members)):
-            order[i] = cur
-            cur = succ[cur]
-        if cur != start:
-            raise MeshError("triangles: mesh boundary is not a set of simple closed loops")
-        loops.append(order)
-    areas = [_ring_area(nodes[lp]) for lp in loops]
-    outer = int(np.argmax(areas))
-    if areas[outer] <= 0:
-        raise MeshError("triangles: mesh has no counter-clockwise outer boundary loop")
-    holes = [lp for i, lp in enumerate(loops) if i != outer]
-    holes.sort(key=lambda lp: int(lp.min()))
-    return [loops[outer]] + holes
+def _counter_clockwise(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """``tri`` with every triangle counter-clockwise: an all-clockwise mesh is reversed;
+    zero-area (below ``1e-12 ×`` the bounding box's larger side squared) or inverted
+    triangles are refused."""
+    size = float(np.ptp(nodes, axis=0).max())
+    area = triangle_areas(nodes, tri)
+    tiny = 1e-12 * size**2
+    if np.all(area < -tiny):
+        tri = tri[:, [0, 2, 1]]
+        area = -area
+    if np.any(np.abs(area) <= tiny):
+        bad = int(np.flatnonzero(np.abs(area) <= tiny)[0])
+        raise MeshError(f"triangles[{bad}]: zero area (degenerate triangle); remesh")
+    if np.any(area < 0):
+        bad = int(np.flatnonzero(area < 0)[0])
+        raise MeshError(f"triangles[{bad}]: inverted (clockwise while others are "
+                        "counter-clockwise); fix its node order")
+    return tri
 
 
-def _ring_area(ring: np.ndarray) -> float:
-    x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+def _check_manifold_and_connected(tri: np.ndarray, n: int) -> None:
+    """Each undirected edge in at most two triangles, with opposite directions
+    (consistent orientation), and one connected piece."""
+    e = directed_edges(tri)
+    _, counts = np.unique(np.sort(e, axis=1), axis=0, return_counts=True)
+    if np.any(counts > 2):
+        raise MeshError("triangles: mesh has a non-manifold edge (shared by more than two "
+                        "triangles); remesh")
+    _, dcounts = np.unique(e, axis=0, return_counts=True)
+    if np.any(dcounts > 1):
+        raise MeshError("triangles: mesh has overlapping triangles (an edge used twice in one "
+                        "direction); remesh")
+    adj = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    ncomp, _ = connected_components(adj, directed=False)
+    if ncomp != 1:
+        raise MeshError(f"triangles: mesh has {ncomp} separate pieces; a part must be one "
+                        "connected piece (mesh each piece as its own part)")
 
 
 @dataclass(frozen=True)
@@ -128,6 +112,14 @@ class Mesh:
         Boundary loops, outer (CCW) first, then holes (CW).
     material : Material or None
         Material of the part, if known.
+
+    Examples
+    --------
+    A unit square of two triangles (given clockwise: reoriented):
+
+    >>> mesh = Mesh.from_arrays([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 2, 1], [0, 3, 2]])
+    >>> mesh.n_nodes, mesh.n_triangles, mesh.outer_loop.tolist(), mesh.area
+    (4, 2, [0, 1, 2, 3], 1.0)
     """
 
     nodes: np.ndarray
@@ -151,65 +143,10 @@ class Mesh:
         ------
         MeshError
         """
-        nodes = np.asarray(nodes, dtype=float)
-        tri = np.asarray(triangles)
-        if nodes.ndim != 2 or nodes.shape[1] != 2 or len(nodes) < 3:
-            raise MeshError(f"nodes: expected an (n, 2) array with n >= 3, got shape {nodes.shape}")
-        if not np.all(np.isfinite(nodes)):
-            bad = int(np.argwhere(~np.isfinite(nodes))[0, 0])
-            raise MeshError(f"nodes[{bad}]: coordinate is not finite; fix the mesh file")
-        if np.any(np.abs(nodes) > 1e12):
-            bad = int(np.argwhere(np.abs(nodes) > 1e12)[0, 0])
-            raise MeshError(f"nodes[{bad}]: coordinate is larger than 1e12 m in magnitude; "
-                            "check the units")
-        if tri.ndim != 2 or tri.shape[1] != 3 or len(tri) == 0:
-            raise MeshError(f"triangles: expected an (m, 3) array with m >= 1, got shape {tri.shape}")
-        if not np.issubdtype(tri.dtype, np.integer):
-            if not np.all(np.isfinite(tri)) or not np.all(tri == np.round(tri)):
-                raise MeshError("triangles: node ids must be integers")
-        tri = tri.astype(np.int64)
-        n = len(nodes)
-        if tri.min() < 0 or tri.max() >= n:
-            raise MeshError(f"triangles: node ids must be in 0..{n - 1}")
-        if np.any((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])):
-            bad = int(np.flatnonzero((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2])
-                                     | (tri[:, 0] == tri[:, 2]))[0])
-            raise MeshError(f"triangles[{bad}]: repeats a node (degenerate triangle)")
-        used = np.zeros(n, bool)
-        used[tri.ravel()] = True
-        if not used.all():
-            raise MeshError(f"nodes[{int(np.flatnonzero(~used)[0])}]: node is used by no triangle; "
-                            "remove unused nodes")
-        diam = float(np.ptp(nodes, axis=0).max())
-        area = triangle_areas(nodes, tri)
-        tiny = 1e-12 * diam**2
-        if np.all(area < -tiny):
-            tri = tri[:, [0, 2, 1]]
-            area = -area
-        if np.any(np.abs(area) <= tiny):
-            bad = int(np.flatnonzero(np.abs(area) <= tiny)[0])
-            raise MeshError(f"triangles[{bad}]: zero area (degenerate triangle); remesh")
-        if np.any(area < 0):
-            bad = int(np.flatnonzero(area < 0)[0])
-            raise MeshError(f"triangles[{bad}]: inverted (clockwise while others are "
-                            "counter-clockwise); fix its node order")
-        # Each undirected edge may belong to at most two triangles, with opposite
-        # directions (consistent orientation).
-        e = _directed_edges(tri)
-        und = np.sort(e, axis=1)
-        _, counts = np.unique(und, axis=0, return_counts=True)
-        if np.any(counts > 2):
-            raise MeshError("triangles: mesh has a non-manifold edge (shared by more than two "
-                            "triangles); remesh")
-        _, dcounts = np.unique(e, axis=0, return_counts=True)
-        if np.any(dcounts > 1):
-            raise MeshError("triangles: mesh has overlapping triangles (an edge used twice in one "
-                            "direction); remesh")
-        adj = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
-        ncomp, _ = connected_components(adj, directed=False)
-        if ncomp != 1:
-            raise MeshError(f"triangles: mesh has {ncomp} separate pieces; a part must be one "
-                            "connected piece (mesh each piece as its own part)")
+        nodes = _checked_nodes(nodes)
+        tri = _checked_triangles(triangles, len(nodes))
+        tri = _counter_clockwise(nodes, tri)
+        _check_manifold_and_connected(tri, len(nodes))
         loops = boundary_loops(nodes, tri)
         return cls(nodes, tri, tuple(loops), material, name)
 
@@ -277,10 +214,9 @@ class Mesh:
 
     @property
     def diameter(self) -> float:
-        """Largest distance between two boundary nodes (m)."""
+        """Largest distance between two boundary nodes (m), from the outer loop by
+        :func:`deformclosure.geometry.point_set_diameter` (as for the part)."""
         if "diameter" not in self._cache:
-            from ..geometry import point_set_diameter
-
             self._cache["diameter"] = point_set_diameter(self.nodes[self.outer_loop])
         return self._cache["diameter"]
 

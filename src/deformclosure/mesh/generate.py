@@ -12,7 +12,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from ..errors import MeshError, PartError
-from .. import limits
+from ..geometry import touch_tolerance
 from ..part import Part
 from .core import Mesh
 
@@ -108,6 +108,87 @@ def default_max_area(part: Part) -> float:
     return opts.max_area if opts.max_area is not None else part.area / 400.0
 
 
+def _mesher_settings(part: Part, max_area: float | None, min_angle: float | None,
+                     points: np.ndarray | None) -> tuple[float, float, np.ndarray]:
+    """Checked ``max_area`` (m²), ``min_angle`` (degrees) and the points to insert (m):
+    the arguments, else the part's mesh options."""
+    from .. import limits    # a higher layer (L3): imported when used
+
+    opts = part.mesh_options
+    max_area = default_max_area(part) if max_area is None else float(max_area)
+    if not (np.isfinite(max_area) and max_area > 0):
+        raise PartError(f"max_area = {max_area!r}: must be a finite area > 0")
+    min_angle = opts.min_angle if min_angle is None else float(min_angle)
+    if not (0 < min_angle <= 34):
+        raise PartError(f"min_angle = {min_angle!r}: use 0 < min_angle <= 34 degrees")
+    pts = np.asarray(opts.points, float).reshape(-1, 2)
+    if points is not None:
+        pts = np.concatenate([pts, np.asarray(points, float).reshape(-1, 2)])
+    limits.check_mesh_points(len(pts), "mesh.points" if points is None else "points")
+    return max_area, min_angle, pts
+
+
+def _check_points_inside(part: Part, pts: np.ndarray, tol: float) -> None:
+    """Refuse points outside the part by more than ``tol`` (m)."""
+    from .. import limits    # a higher layer (L3): imported when used
+
+    if len(pts):
+        outside = ~limits.points_within(part.polygon, pts, tol)  # indexed: no points × edges
+        if outside.any():
+            bad = int(np.flatnonzero(outside)[0])
+            raise PartError(f"points[{bad}]: point lies outside the part; move it onto or inside the part")
+
+
+def _rings_with_points(part: Part, pts: np.ndarray, tol: float
+                       ) -> tuple[list[np.ndarray], np.ndarray]:
+    """The part's rings with the points on them (within ``tol``) inserted as vertices, and
+    the points left for the interior."""
+    remaining = np.ones(len(pts), bool)
+    new_rings = []
+    for ring in [part.outer] + list(part.holes):
+        if len(pts):
+            ring, on = insert_points_in_ring(ring, pts, tol)
+            remaining &= ~on
+        new_rings.append(ring)
+    return new_rings, pts[remaining]
+
+
+def _triangulate(rings: list[np.ndarray], interior_pts: np.ndarray, holes: tuple,
+                 min_angle: float, max_area: float) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle's constrained quality triangulation of the rings (as segments) and the
+    interior points: node coordinates (m) and triangles, unused input vertices dropped."""
+    from .. import limits    # a higher layer (L3): imported when used
+
+    verts = np.concatenate(rings + [interior_pts])
+    segs = []
+    off = 0
+    for ring in rings:
+        idx = np.arange(off, off + len(ring))
+        segs.append(np.column_stack([idx, np.roll(idx, -1)]))
+        off += len(ring)
+    geom: dict = {"vertices": verts, "segments": np.concatenate(segs)}
+    if holes:
+        geom["holes"] = np.array([Polygon(h).representative_point().coords[0] for h in holes])
+    # Triangle's switch parser does not read exponents: write plain decimals.
+    flags = (f"pq{np.format_float_positional(min_angle, trim='-')}"
+             f"a{np.format_float_positional(max_area, trim='-')}Q"
+             f"S{limits.steiner_cap()}")  # a backstop: a wrong estimate cannot run away
+    try:
+        out = tr.triangulate(geom, flags)
+    except Exception as err:  # the C library reports failures as generic errors
+        raise MeshError(f"the mesher failed ({err}); check the part geometry and mesh options") from None
+    return np.asarray(out["vertices"], float), np.asarray(out["triangles"], np.int64)
+
+
+def _drop_unused(nodes: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle may leave unused input vertices (duplicates); drop them, keeping order."""
+    used = np.zeros(len(nodes), bool)
+    used[tris.ravel()] = True
+    if used.all():
+        return nodes, tris
+    return nodes[used], (np.cumsum(used) - 1)[tris]
+
+
 def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None = None,
               points: np.ndarray | None = None) -> Mesh:
     """Quality-mesh a part with linear triangles.
@@ -121,6 +202,8 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
         Smallest angle (degrees, ≤ 34). Default: the part's ``mesh.min_angle``.
     points : ndarray, shape (k, 2), optional
         Extra points (m) to insert as nodes, in addition to the part's ``mesh.points``.
+        Points on the boundary (within the SPEC's touching tolerance, ``1e-9 ×`` the
+        part's diameter) split the boundary edge they lie on.
 
     Returns
     -------
@@ -133,73 +216,34 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
         Bad mesh options or points outside the part.
     MeshError
         If the mesher fails.
+
+    Examples
+    --------
+    A 12 × 20 mm block with nodes forced at the middle of its long sides:
+
+    >>> from deformclosure import demo_part
+    >>> mesh = mesh_part(demo_part(max_area_mm2=20.0))
+    >>> mesh.n_triangles > 12, mesh.find_node([0.0, 0.01]) in mesh.outer_loop
+    (True, True)
     """
+    from .. import limits    # a higher layer (L3): imported when used
+
     opts = part.mesh_options
     from_file = max_area is None and opts.max_area is not None
-    max_area = default_max_area(part) if max_area is None else float(max_area)
-    if not (np.isfinite(max_area) and max_area > 0):
-        raise PartError(f"max_area = {max_area!r}: must be a finite area > 0")
-    min_angle = opts.min_angle if min_angle is None else float(min_angle)
-    if not (0 < min_angle <= 34):
-        raise PartError(f"min_angle = {min_angle!r}: use 0 < min_angle <= 34 degrees")
-    pts = np.asarray(opts.points, float).reshape(-1, 2)
-    if points is not None:
-        pts = np.concatenate([pts, np.asarray(points, float).reshape(-1, 2)])
-    limits.check_mesh_points(len(pts), "mesh.points" if points is None else "points")
+    max_area, min_angle, pts = _mesher_settings(part, max_area, min_angle, points)
     units, scale = _units_of(part)
     diam = part.diameter
-    tol = 1e-9 * diam
-    poly = part.polygon
-    if len(pts):
-        outside = ~limits.points_within(poly, pts, tol)  # indexed: no points × edges work
-        if outside.any():
-            bad = int(np.flatnonzero(outside)[0])
-            raise PartError(f"points[{bad}]: point lies outside the part; move it onto or inside the part")
+    tol = touch_tolerance(diam)
+    _check_points_inside(part, pts, tol)
     limits.check_ring_gaps(part.outer, part.holes, diam, units=units, scale=scale)
-
-    rings = [part.outer] + list(part.holes)
-    remaining = np.ones(len(pts), bool)
-    new_rings = []
-    for ring in rings:
-        if len(pts):
-            ring, on = insert_points_in_ring(ring, pts, tol)
-            remaining &= ~on
-        new_rings.append(ring)
-    interior_pts = pts[remaining]
+    new_rings, interior_pts = _rings_with_points(part, pts, tol)
     # Refuse, from an estimate, a mesh too large to analyse or too slow to make.
     field = "mesh.max_area" if from_file else "max_area"
     limits.check_mesh_size(new_rings, max_area, min_angle, interior_pts, units=units,
                            scale=scale, field=field)
-
-    verts = np.concatenate(new_rings + [interior_pts])
-    segs = []
-    off = 0
-    for ring in new_rings:
-        k = len(ring)
-        idx = np.arange(off, off + k)
-        segs.append(np.column_stack([idx, np.roll(idx, -1)]))
-        off += k
-    geom: dict = {"vertices": verts, "segments": np.concatenate(segs)}
-    if part.holes:
-        geom["holes"] = np.array([Polygon(h).representative_point().coords[0] for h in part.holes])
-    # Triangle's switch parser does not read exponents: write plain decimals.
-    flags = (f"pq{np.format_float_positional(min_angle, trim='-')}"
-             f"a{np.format_float_positional(max_area, trim='-')}Q"
-             f"S{limits.steiner_cap()}")  # a backstop: a wrong estimate cannot run away
-    try:
-        out = tr.triangulate(geom, flags)
-    except Exception as err:  # the C library reports failures as generic errors
-        raise MeshError(f"the mesher failed ({err}); check the part geometry and mesh options") from None
-    nodes = np.asarray(out["vertices"], float)
-    tris = np.asarray(out["triangles"], np.int64)
+    nodes, tris = _triangulate(new_rings, interior_pts, part.holes, min_angle, max_area)
     limits.check_mesh_result(len(tris), max_area, units=units, scale=scale, field=field)
-    # Triangle may leave unused input vertices (duplicates); drop them, keeping order.
-    used = np.zeros(len(nodes), bool)
-    used[tris.ravel()] = True
-    if not used.all():
-        remap = np.cumsum(used) - 1
-        nodes = nodes[used]
-        tris = remap[tris]
+    nodes, tris = _drop_unused(nodes, tris)
     mesh = Mesh.from_arrays(nodes, tris, material=part.material, name=part.name)
     if len(pts):
         from scipy.spatial import cKDTree  # lazy: scipy.spatial is slow to import

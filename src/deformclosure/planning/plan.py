@@ -54,6 +54,7 @@ import math
 import os
 import time
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
@@ -66,8 +67,10 @@ from ..errors import GraspError
 from ..grasp import pieces as pc
 from ..grasp._kernels import _heap_pop, _heap_push, path_to
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
+from ..grasp.elastic_limit import elastic_limit_separation
 from ..grasp.release import release_energies
 from ..grasp.separation import lipschitz_constant, optimize_separation_arrays, vertex_energies
+from ..geometry import touch_tolerance
 from ..units import SI_UNITS
 
 __all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice", "SETTLED"]
@@ -354,6 +357,111 @@ class _PairOutcome:
     ok: bool              # settled within ε by bounds
 
 
+class _PairSearch:
+    """The branch and bound of :func:`_settle_pair` for one pair: its best sample, the
+    heap of cells whose bound still exceeds ``best + ε``, and the bound of the cells
+    settled so far (all in J, contracting frame)."""
+
+    def __init__(self, ws: _Workspace, s: int, C: float, eps: float, lam: float,
+                 tol: float) -> None:
+        self.ws, self.s, self.C, self.eps, self.lam, self.tol = ws, s, C, eps, lam, tol
+        self.x0s, self.ks = float(ws.x0[s]), float(ws.k[s])
+        self.best = [0.0, math.nan, math.nan]            # Q, x, B
+        self.start_evals = ws.n_eval
+        self.delicate = False
+        self.heap: list = []
+        self.done_ub = 0.0
+        self.counter = 0
+
+    def evaluate(self, x: float, y: float, sample: bool = True) -> tuple[np.ndarray, float]:
+        """Record Q(x) (if ``sample``); return the path that bounds G on [x, y], Q(x).
+
+        A sample inside a strict span that is not a strict minimum means that ``U_s`` and
+        a neighbour's curve agree to rounding (mirror-image pairs on a symmetric mesh):
+        sampled energies cannot settle such a pair; the exact method does.
+        """
+        strict, B, _Bst, path = self.ws.escape(self.s, x, y, self.tol)
+        Q = 0.0
+        if strict:
+            d = self.x0s - x
+            Q = (B if B < self.C else self.C) - (0.5 * self.ks * d * d if d > 0.0 else 0.0)
+            if sample and Q > self.best[0]:
+                self.best[:] = Q, x, B
+        elif sample:
+            self.delicate = True
+        return path, Q
+
+    def push(self, x: float, y: float, path: np.ndarray, cap: float = math.inf) -> None:
+        """Bound the cell ``[x, y]`` by ``path`` (at most ``cap``); keep it if it may still
+        hold a quality above ``best + ε``."""
+        ws = self.ws
+        b, arg = _k_path_bound(path, ws.x0, ws.k, self.s, self.C, x, y)
+        b = min(b, cap)
+        if b <= self.best[0] + self.eps:
+            self.done_ub = max(self.done_ub, b)
+        else:
+            self.counter += 1
+            heapq.heappush(self.heap, (-b, self.counter, x, y, path, arg, cap))
+
+    def seed(self, spans: list[tuple[float, float, bool, bool]], lat_x: np.ndarray) -> None:
+        """The first cells: each strict span cut at the shared lattice values in it."""
+        tol = self.tol
+        for a, b, ao, bo in spans:
+            j0, j1 = np.searchsorted(lat_x, [a + 2 * tol, b - 2 * tol])
+            pts = [a, *(float(v) for v in lat_x[j0:j1]), b]
+            for i in range(len(pts) - 1):
+                push_path = self.evaluate(pts[i], pts[i + 1], sample=(i > 0 or not ao))[0]
+                self.push(pts[i], pts[i + 1], push_path)
+            if not bo:                                        # the closed end σ0 of the range,
+                strict, B, _Bst, _p = self.ws.escape(self.s, b, b, tol)  # a tie at 0 is no surprise
+                if strict and min(B, self.C) > self.best[0]:
+                    self.best[:] = min(B, self.C), b, B
+
+    def open(self, max_evals: int) -> bool:
+        """Whether a cell may still beat ``best + ε`` and the budget allows a split."""
+        return bool(self.heap and -self.heap[0][0] > self.best[0] + self.eps
+                    and self.ws.n_eval - self.start_evals < max_evals and not self.delicate)
+
+    def _split_point(self, x: float, y: float, arg: float, cap: float
+                     ) -> tuple[float | None, str]:
+        """Where to split ``[x, y]`` and how (:func:`_settle_pair`); ``None``: a sliver."""
+        if math.isfinite(cap):                       # a sliver: nothing left to split
+            return None, ""
+        w = y - x
+        if arg > x:                                  # where the bound peaks
+            return min(max(arg, x + 0.125 * w), y - 0.125 * w), "peak"
+        near, c_next = self.ws.crossings_near(x, self.tol)
+        if not near:                                 # re-search x on a shorter cell
+            return 0.5 * (x + y), "halve"
+        return min(x + 32 * self.tol, 0.5 * (x + self.tol + c_next), 0.5 * (x + y)), "past"
+
+    def split(self) -> bool:
+        """Split the cell of the largest bound; ``False`` (cell kept) if it cannot be."""
+        item = heapq.heappop(self.heap)
+        _, _, x, y, path, arg, cap = item
+        m, how = self._split_point(x, y, arg, cap)
+        if m is None or not (x + 2 * self.tol < m < y - 2 * self.tol):   # too narrow
+            heapq.heappush(self.heap, item)
+            return False
+        if how == "peak":
+            self.push(x, m, path)                    # P stays valid on the left part
+            self.push(m, y, self.evaluate(m, y)[0])
+        elif how == "halve":
+            self.push(x, m, self.evaluate(x, m, sample=False)[0])
+            self.push(m, y, self.evaluate(m, y)[0])
+        else:                                        # just past a crossing at x
+            path_m, Qm = self.evaluate(m, y)
+            self.push(x, m, path, cap=Qm + self.lam * (m - x))   # no crossing in (x + tol, m]
+            self.push(m, y, path_m)
+        return True
+
+    def outcome(self) -> _PairOutcome:
+        top = -self.heap[0][0] if self.heap else 0.0
+        upper = max(self.best[0], self.done_ub, top)
+        ok = (not self.heap or top <= self.best[0] + self.eps) and not self.delicate
+        return _PairOutcome(self.best[0], self.best[1], self.best[2], upper, ok)
+
+
 def _settle_pair(ws: _Workspace, s: int, C: float, eps: float, lam: float, tol: float,
                  spans: list[tuple[float, float, bool, bool]], lat_x: np.ndarray,
                  max_evals: int) -> _PairOutcome:
@@ -378,89 +486,11 @@ def _settle_pair(ws: _Workspace, s: int, C: float, eps: float, lam: float, tol: 
     when the budget ``max_evals`` (escape searches) ran out, or a cell became too
     narrow to split.
     """
-    x0, k = ws.x0, ws.k
-    x0s, ks = float(x0[s]), float(k[s])
-    best = [0.0, math.nan, math.nan]            # Q, x, B
-    start_evals = ws.n_eval
-
-    delicate = [False]
-
-    def evaluate(x: float, y: float, sample: bool = True) -> tuple[np.ndarray, float]:
-        """Record Q(x) (if ``sample``); return the path that bounds G on [x, y], Q(x).
-
-        A sample inside a strict span that is not a strict minimum means that ``U_s`` and
-        a neighbour's curve agree to rounding (mirror-image pairs on a symmetric mesh):
-        sampled energies cannot settle such a pair; the exact method does.
-        """
-        strict, B, _Bst, path = ws.escape(s, x, y, tol)
-        Q = 0.0
-        if strict:
-            d = x0s - x
-            Q = (B if B < C else C) - (0.5 * ks * d * d if d > 0.0 else 0.0)
-            if sample and Q > best[0]:
-                best[0], best[1], best[2] = Q, x, B
-        elif sample:
-            delicate[0] = True
-        return path, Q
-
-    heap: list = []
-    done_ub = 0.0
-    counter = 0
-
-    def push(x: float, y: float, path: np.ndarray, cap: float = math.inf) -> None:
-        nonlocal done_ub, counter
-        b, arg = _k_path_bound(path, x0, k, s, C, x, y)
-        b = min(b, cap)
-        if b <= best[0] + eps:
-            done_ub = max(done_ub, b)
-        else:
-            counter += 1
-            heapq.heappush(heap, (-b, counter, x, y, path, arg, cap))
-
-    for a, b, ao, bo in spans:
-        j0, j1 = np.searchsorted(lat_x, [a + 2 * tol, b - 2 * tol])
-        pts = [a, *(float(v) for v in lat_x[j0:j1]), b]
-        for i in range(len(pts) - 1):
-            push(pts[i], pts[i + 1], evaluate(pts[i], pts[i + 1], sample=(i > 0 or not ao))[0])
-        if not bo:                                   # the closed end σ0 of the range,
-            strict, B, _Bst, _p = ws.escape(s, b, b, tol)   # a tie at 0 is no surprise
-            if strict and min(B, C) > best[0]:
-                best[0], best[1], best[2] = min(B, C), b, B
-    while (heap and -heap[0][0] > best[0] + eps and ws.n_eval - start_evals < max_evals
-           and not delicate[0]):
-        item = heapq.heappop(heap)
-        _, _, x, y, path, arg, cap = item
-        w = y - x
-        if math.isfinite(cap):                       # a sliver: nothing left to split
-            heapq.heappush(heap, item)
-            break
-        if arg > x:
-            m = min(max(arg, x + 0.125 * w), y - 0.125 * w)   # where the bound peaks
-            if not (x + 2 * tol < m < y - 2 * tol):   # too narrow to split: give up
-                heapq.heappush(heap, item)
-                break
-            push(x, m, path)                         # P stays valid on the left part
-            push(m, y, evaluate(m, y)[0])
-            continue
-        lo_c, c_next = ws.crossings_near(x, tol)
-        if not lo_c:                                 # re-search x on a shorter cell
-            m = 0.5 * (x + y)
-            if not (x + 2 * tol < m < y - 2 * tol):
-                heapq.heappush(heap, item)
-                break
-            push(x, m, evaluate(x, m, sample=False)[0])
-            push(m, y, evaluate(m, y)[0])
-            continue
-        m = min(x + 32 * tol, 0.5 * (x + tol + c_next), 0.5 * (x + y))
-        if not (x + 2 * tol < m < y - 2 * tol):
-            heapq.heappush(heap, item)
-            break
-        path_m, Qm = evaluate(m, y)
-        push(x, m, path, cap=Qm + lam * (m - x))     # no crossing in (x + tol, m]
-        push(m, y, path_m)
-    upper = max(best[0], done_ub, -heap[0][0] if heap else 0.0)
-    ok = (not heap or -heap[0][0] <= best[0] + eps) and not delicate[0]
-    return _PairOutcome(best[0], best[1], best[2], upper, ok)
+    search = _PairSearch(ws, s, C, eps, lam, tol)
+    search.seed(spans, lat_x)
+    while search.open(max_evals) and search.split():
+        pass
+    return search.outcome()
 
 
 @dataclass(frozen=True)
@@ -506,6 +536,14 @@ class PlanResult:
     mode : str
     jaw_width : float
     timings : dict
+
+    Examples
+    --------
+    >>> from deformclosure import demo_part, mesh_part
+    >>> plan = plan_grasps(mesh_part(demo_part(max_area_mm2=20.0)), top=0)
+    >>> row = plan.to_dict()["pairs"][0]                   # the best pair
+    >>> (row["a"], row["b"]) == tuple(plan.pairs[0]), row["quality"] == float(plan.quality[0])
+    (True, True)
     """
 
     pairs: np.ndarray
@@ -611,6 +649,8 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     ``T = B K⁺ E_b`` (one block solve with the model's factorisation); a jaw pair's
     strain per unit distance change is ``Σ_j λ_j T_j e`` over its contact nodes
     (``λ = ±k`` for point jaws), maximised over the elements by a compiled kernel.
+    ``σ_L`` follows by :func:`~deformclosure.grasp.elastic_limit.elastic_limit_separation`,
+    the formula of the single-pair :func:`~deformclosure.grasp.elastic_limit.elastic_limit`.
 
     Parameters
     ----------
@@ -622,30 +662,43 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     max_bytes : float
         Memory allowed for ``T`` (bytes); a larger request raises ``GraspError``.
     """
-    from ._kernels import max_strain_magnitude, max_strain_point_jaws
-
     mesh = model.mesh
-    cc = model.condensed
     pairs = model.graph.pairs[pairs_idx]
     e = mesh.nodes[pairs[:, 1]] - mesh.nodes[pairs[:, 0]]
     sig0 = np.linalg.norm(e, axis=1)
     e /= sig0[:, None]
+    counts, loaded, weight = _jaw_loads(model, pairs, pairs_idx)
+    nodes_used, pos = np.unique(loaded, return_inverse=True)
+    from ..limits import check_strain_responses
+
+    check_strain_responses(len(nodes_used), mesh.n_nodes, mesh.n_triangles, max_bytes)  # before T
+    T = _unit_force_strains(mesh, model.condensed, nodes_used)
+    e_max = _max_pair_strains(T, model.jaw_width, np.concatenate([[0], np.cumsum(counts)]), pos,
+                              weight, e)
+    return e_max, elastic_limit_separation(sig0, e_max, elastic_limit_strain, model.mode)
+
+
+def _jaw_loads(model: GraspModel, pairs: np.ndarray, pairs_idx: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per pair, its number of loaded nodes; all loaded nodes, pair by pair; and their
+    forces (N per m of approach, along the pair's unit direction): ``+k`` at ``a`` and
+    ``−k`` at ``b`` for point jaws, the patch forces of wide jaws."""
     if model.jaw_width:
         node_sets, forces = _wide_forces(model, pairs)
         counts = np.array([len(J) for J in node_sets], dtype=np.int64)
         loaded = np.concatenate([np.asarray(J, dtype=np.int64) for J in node_sets])
         weight = np.concatenate([np.asarray(f, dtype=float) for f in forces])
-    else:
-        counts = np.full(len(pairs), 2, dtype=np.int64)
-        loaded = pairs.ravel().astype(np.int64)
-        k = model.stiffness.k[pairs_idx]
-        weight = np.column_stack([k, -k]).ravel()           # +k e at a, −k e at b
-    ptr = np.concatenate([[0], np.cumsum(counts)])
-    nodes_used, pos = np.unique(loaded, return_inverse=True)
-    q = len(nodes_used)
-    from ..limits import check_strain_responses
+        return counts, loaded, weight
+    counts = np.full(len(pairs), 2, dtype=np.int64)
+    k = model.stiffness.k[pairs_idx]
+    return counts, pairs.ravel().astype(np.int64), np.column_stack([k, -k]).ravel()
 
-    check_strain_responses(q, mesh.n_nodes, mesh.n_triangles, max_bytes)   # before T is built
+
+def _unit_force_strains(mesh, cc, nodes_used: np.ndarray) -> np.ndarray:
+    """``T[P, 3c + j, i]``: strain component ``j`` of element ``i`` under a unit force at
+    node ``nodes_used[P]`` in direction ``c`` (1/N; component-major, so the kernels'
+    inner loops run over elements)."""
+    q = len(nodes_used)
     n2 = 2 * mesh.n_nodes
     E = np.zeros((n2, 2 * q))
     E[2 * nodes_used, 2 * np.arange(q)] = 1.0
@@ -659,15 +712,21 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
     tri_dofs = np.empty((mesh.n_triangles, 6), dtype=np.int64)
     tri_dofs[:, 0::2] = 2 * mesh.triangles
     tri_dofs[:, 1::2] = 2 * mesh.triangles + 1
-    # T[P, 3c + j, i] = strain component j of element i under a unit force at node P,
-    # direction c (component-major: the kernels' inner loops run over elements)
     T = np.einsum("mij,mjr->rim", B, X[tri_dofs]).reshape(q, 6, mesh.n_triangles)
     del X
-    T = np.ascontiguousarray(T)
+    return np.ascontiguousarray(T)
+
+
+def _max_pair_strains(T: np.ndarray, jaw_width: float, ptr: np.ndarray, pos: np.ndarray,
+                      weight: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Largest element strain magnitude of every pair (1/m), by the compiled kernels on
+    chunks of pairs in threads (they release the GIL)."""
+    from ._kernels import max_strain_magnitude, max_strain_point_jaws
+
     ex, ey = np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1])
-    e_max = np.empty(len(pairs))
-    bounds = np.linspace(0, len(pairs), 8 * _workers() + 1).astype(np.int64)
-    if model.jaw_width:
+    e_max = np.empty(len(e))
+    bounds = np.linspace(0, len(e), 8 * _workers() + 1).astype(np.int64)
+    if jaw_width:
         def chunk(i: int) -> None:
             max_strain_magnitude(T, ptr, pos, weight, ex, ey, bounds[i], bounds[i + 1], e_max)
     else:
@@ -676,14 +735,9 @@ def pair_elastic_limits(model: GraspModel, pairs_idx: np.ndarray,
 
         def chunk(i: int) -> None:
             max_strain_point_jaws(T, pa, pb, kk, ex, ey, bounds[i], bounds[i + 1], e_max)
-    with ThreadPoolExecutor(_workers()) as pool:  # the kernels release the GIL
+    with ThreadPoolExecutor(_workers()) as pool:
         list(pool.map(chunk, range(len(bounds) - 1)))
-    travel = elastic_limit_strain / e_max
-    if model.mode == "contracting":
-        sigma_L = np.maximum(0.0, sig0 - travel)
-    else:
-        sigma_L = sig0 + travel
-    return e_max, sigma_L
+    return e_max
 
 
 def _wide_forces(model: GraspModel, pairs: np.ndarray):
@@ -707,7 +761,9 @@ def lattice(lo: float, hi: float, step: float, max_size: int | None = None) -> n
     return np.arange(j0, j1 + 1) * step
 
 
-def _region_mask(nodes: np.ndarray, regions: Sequence[Any] | None) -> np.ndarray | None:
+def _region_mask(mesh, regions: Sequence[Any] | None) -> np.ndarray | None:
+    """Which nodes lie in the union of ``regions`` (within the SPEC's touching tolerance),
+    ``None`` without regions."""
     if not regions:
         return None
     import shapely
@@ -725,104 +781,45 @@ def _region_mask(nodes: np.ndarray, regions: Sequence[Any] | None) -> np.ndarray
         else:
             raise GraspError(f"region {r!r}: give (xmin, ymin, xmax, ymax) in m or a shapely geometry")
     union = shapely.union_all(geoms)
-    tol = 1e-9 * float(np.ptp(nodes, axis=0).max())
-    return shapely.dwithin(shapely.points(nodes), union, tol)
+    return shapely.dwithin(shapely.points(mesh.nodes), union, touch_tolerance(mesh.diameter))
 
 
-def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
-                mode: str = "contracting", jaw_width: float = 0.0,
-                separation_range: tuple[float, float] | None = None,
-                regions: Sequence[Any] | None = None, top: int = 10,
-                n_sigma: int = 400, max_sigma: int = 200_000,
-                progress: Callable[[int, int], None] | None = None,
-                model: GraspModel | None = None, allow_pulling: bool = False,
-                max_evaluations: int = 4000) -> PlanResult:
-    """Rank every jaw pair of a part, each pair's quality within ε of its optimum.
-
-    Parameters
-    ----------
-    mesh : Mesh
-        Meshed part with material.
-    K : sparse matrix, optional
-        Stiffness (N/m); assembled if omitted.
-    eps : float, optional
-        ε (J): every reported quality is within ε of the pair's optimum. Default: the
-        value giving about ``n_sigma`` shared lattice points over the range of all
-        selected pairs (reported).
-    mode : {"contracting", "expanding"}
-    jaw_width : float
-        Jaw contact width (m).
-    separation_range : (float, float), optional
-        Keep pairs whose rest distance σ0 (m) lies in this range.
-    regions : sequence, optional
-        Keep pairs whose both jaw nodes lie in the union of these regions: boxes
-        ``(xmin, ymin, xmax, ymax)`` in m or shapely geometries.
-    top : int
-        Number of best pairs refined with the exact method (``refined``).
-    n_sigma : int
-        Size of the coarse shared lattice, and the default ε.
-    max_sigma : int
-        Largest shared lattice accepted (only reached with a huge ``n_sigma``).
-    progress : callable, optional
-        Called as ``progress(done, total)`` after each lattice value and each pair
-        refined by bounds.
-    model : GraspModel, optional
-        Reuse a model from :func:`grasp_model`.
-    allow_pulling : bool
-        Let pairs flagged ``pulls`` (the jaw line leaves the part at a jaw, so a jaw
-        would have to pull) into ``refined``; by default they are ranked and flagged
-        but not proposed.
-    max_evaluations : int
-        Escape-level evaluations one pair may use before it is solved exactly instead.
-
-    Returns
-    -------
-    PlanResult
-
-    Raises
-    ------
-    GraspError
-        Bad ε, range, regions, or no pair left after filtering.
-
-    Notes
-    -----
-    See the module docstring for the scheme and its guarantee
-    ``quality ≤ Q* ≤ quality_upper ≤ quality + ε`` on every row.
-    """
-    t = {}
+def _check_plan_options(eps: float | None, top: int, max_evaluations: int) -> None:
     if eps is not None and not (math.isfinite(eps) and eps > 0):
         raise GraspError(f"eps = {eps!r}: must be a finite energy > 0 in joules")
     if not (isinstance(top, (int, np.integer)) and top >= 0):
         raise GraspError(f"top = {top!r}: must be a whole number >= 0")
     if not (isinstance(max_evaluations, (int, np.integer)) and max_evaluations >= 1):
         raise GraspError(f"max_evaluations = {max_evaluations!r}: must be a whole number >= 1")
-    if model is None:
-        model = grasp_model(mesh, K, mode=mode, jaw_width=jaw_width)
-    t.update(model.timings)
-    graph = model.graph
-    V = graph.n_vertices
-    sigma0 = model.stiffness.sigma0
-    k = model.stiffness.k
-    sel = np.ones(V, bool)
+
+
+def _selected_pairs(mesh, model: GraspModel, separation_range: tuple[float, float] | None,
+                    regions: Sequence[Any] | None) -> np.ndarray:
+    """Graph vertices kept by the separation-range and region filters."""
+    graph, sigma0 = model.graph, model.stiffness.sigma0
+    sel = np.ones(graph.n_vertices, bool)
     if separation_range is not None:
         lo_r, hi_r = map(float, separation_range)
         if not (math.isfinite(lo_r) and not math.isnan(hi_r) and 0 <= lo_r <= hi_r):
             raise GraspError(f"separation range {separation_range!r}: need 0 <= min <= max (m)")
         sel &= (sigma0 >= lo_r) & (sigma0 <= hi_r)
-    rm = _region_mask(mesh.nodes, regions)
+    rm = _region_mask(mesh, regions)
     if rm is not None:
         sel &= rm[graph.pairs[:, 0]] & rm[graph.pairs[:, 1]]
     idx = np.flatnonzero(sel)
     if not len(idx):
         raise GraspError("no jaw pair is left after the separation-range and region filters; widen them")
-    if mesh.material is None:
-        raise GraspError("no material: the elastic-limit strain e_L is unknown")
-    t0 = time.perf_counter()
-    e_max, sigma_L = pair_elastic_limits(model, idx, mesh.material.elastic_limit_strain)
-    t["elastic_limits"] = time.perf_counter() - t0
+    return idx
 
-    # Shared lattice (paper §4.7). λ bounds the slope of every vertex energy, so of
-    # U_A = U_w − U_s and of U_L, over the whole range.
+
+def _shared_lattice(mode: str, sigma0: np.ndarray, k: np.ndarray, sigma_L: np.ndarray,
+                    idx: np.ndarray, eps: float | None, n_sigma: int, max_sigma: int
+                    ) -> tuple[float, float, float, np.ndarray]:
+    """``λ`` (N), ε (J), step ξ (m) and values of the coarse shared lattice (paper §4.7).
+
+    λ bounds the slope of every vertex energy, so of ``U_A = U_w − U_s`` and of
+    ``U_L``, over the whole range; ε defaults to about ``n_sigma`` lattice values.
+    """
     if mode == "contracting":
         lo, hi = float(sigma_L.min()), float(sigma0[idx].max())
     else:
@@ -832,10 +829,46 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     if eps is None:
         eps = lam * span / max(int(n_sigma), 1)
     step = max(eps / lam, span / max(int(n_sigma), 1))     # coarse: ≤ n_sigma + 1 values
-    grid = lattice(lo, hi, step, max_size=max_sigma)
+    return lam, eps, step, lattice(lo, hi, step, max_size=max_sigma)
 
-    # Step 1: strict spans of every pair, in the contracting frame x = sign·σ.
-    t0 = time.perf_counter()
+
+@dataclass
+class _Spans:
+    """Step 1 of the plan, in the contracting frame ``x = sign·σ``: per selected pair
+    (position ``i`` in ``idx``) its range ``[x_lo, x_hi]``, ``C = U_s(σ_L)`` (J) and
+    tolerance, and its strict spans ``(a, b)`` (open ends ``ao``/``bo``) grouped by
+    pair, with the workspace of the escape searches."""
+
+    sign: float
+    x_lo: np.ndarray
+    x_hi: np.ndarray
+    C: np.ndarray
+    tol: float
+    tols: np.ndarray
+    ws: _Workspace
+    span_i: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    ao: np.ndarray
+    bo: np.ndarray
+
+    @property
+    def strict_pairs(self) -> np.ndarray:
+        """Positions in ``idx`` of the pairs with a strict span (the others: Q ≡ 0)."""
+        return np.unique(self.span_i)
+
+    def of_pair(self, n: int) -> list[tuple[float, float, bool, bool]]:
+        """The strict spans of the ``n``-th pair of :attr:`strict_pairs`."""
+        i = self.strict_pairs[n]
+        j0, j1 = np.searchsorted(self.span_i, [i, i + 1])
+        return [(float(self.a[j]), float(self.b[j]), bool(self.ao[j]), bool(self.bo[j]))
+                for j in range(j0, j1)]
+
+
+def _strict_spans(graph, sigma0: np.ndarray, k: np.ndarray, sigma_L: np.ndarray,
+                  idx: np.ndarray, mode: str) -> _Spans:
+    """Step 1: where each selected pair is a strict local minimum (module docstring)."""
+    V = graph.n_vertices
     sign = 1.0 if mode == "contracting" else -1.0
     x0 = sign * sigma0
     x_lo, x_hi = sign * sigma_L, x0[idx]                 # each pair's range [x_lo, x_hi]
@@ -851,23 +884,48 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
     out_i = np.empty(cap, np.int64)
     out_a, out_b = np.empty(cap), np.empty(cap)
     out_ao, out_bo = np.empty(cap, np.bool_), np.empty(cap, np.bool_)
-    n_spans = _k_strict_spans(ws.indptr, ws.indices, ws.x0, ws.k, idx.astype(np.int64),
-                              np.ascontiguousarray(x_lo), np.ascontiguousarray(x_hi),
-                              cr_ptr, cr_x, tols, out_i, out_a, out_b, out_ao, out_bo)
-    span_i = out_i[:n_spans]
-    strict_local = np.unique(span_i)                     # positions in idx
-    t["strict_spans"] = time.perf_counter() - t0
+    n = _k_strict_spans(ws.indptr, ws.indices, ws.x0, ws.k, idx.astype(np.int64),
+                        np.ascontiguousarray(x_lo), np.ascontiguousarray(x_hi),
+                        cr_ptr, cr_x, tols, out_i, out_a, out_b, out_ao, out_bo)
+    return _Spans(sign, x_lo, x_hi, C, tol, tols, ws, out_i[:n], out_a, out_b, out_ao, out_bo)
 
-    # Step 2: the coarse shared lattice, every pair at once.
-    n_strict = len(strict_local)
-    total_steps = len(grid) + n_strict
-    best_Q = np.zeros(len(idx))
-    best_s = np.full(len(idx), np.nan)
-    best_UA = np.zeros(len(idx))
-    best_UL = np.zeros(len(idx))
-    kk = k[idx]
-    UsL = 0.5 * kk * (sigma0[idx] - sigma_L) ** 2
-    t0 = time.perf_counter()
+
+@dataclass
+class _Rows:
+    """The plan's values per selected pair (position in ``idx``): quality, σ*, U_A, U_L
+    and upper bound (SI), how each was settled, and whether by the exact method."""
+
+    Q: np.ndarray
+    s_star: np.ndarray
+    UA: np.ndarray
+    UL: np.ndarray
+    upper: np.ndarray
+    settled: np.ndarray
+    exact: np.ndarray
+
+    @classmethod
+    def zeros(cls, n: int) -> "_Rows":
+        return cls(np.zeros(n), np.full(n, np.nan), np.zeros(n), np.zeros(n), np.zeros(n),
+                   np.full(n, "zero", dtype=object), np.zeros(n, bool))
+
+    def set_exact(self, i: int, r) -> None:
+        """Row ``i`` takes the exact method's values (``r`` a SeparationResult)."""
+        self.Q[i] = r.quality
+        self.upper[i] = r.quality
+        self.s_star[i] = np.nan if r.sigma_star is None else r.sigma_star
+        self.UA[i] = math.inf if r.U_A_infinite else (0.0 if r.U_A is None else r.U_A)
+        self.UL[i] = r.U_L
+        self.settled[i] = "exact"
+        self.exact[i] = True
+
+
+def _lattice_sweep(graph, sigma0: np.ndarray, k: np.ndarray, sigma_L: np.ndarray,
+                   idx: np.ndarray, mode: str, grid: np.ndarray,
+                   progress: Callable[[int, int], None] | None, total_steps: int) -> _Rows:
+    """Step 2: the best ``Q`` of every selected pair on the shared lattice (its σ, U_A,
+    U_L), one union–find sweep of all vertices per lattice value."""
+    best = _Rows.zeros(len(idx))
+    UsL = 0.5 * k[idx] * (sigma0[idx] - sigma_L) ** 2
     range_lo, range_hi = (sigma_L, sigma0[idx]) if mode == "contracting" else (sigma0[idx], sigma_L)
 
     def sweep(sig: float) -> tuple[np.ndarray, np.ndarray]:
@@ -883,97 +941,177 @@ def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
             for j, (sig, (R, UL)) in enumerate(zip(block, pool.map(sweep, block)), start=lo_j):
                 inside = (sig >= range_lo) & (sig <= range_hi)
                 Q = np.where(inside, np.minimum(R, UL), -np.inf)
-                better = Q > best_Q
-                best_Q = np.where(better, Q, best_Q)
-                best_s = np.where(better, sig, best_s)
-                best_UA = np.where(better, R, best_UA)
-                best_UL = np.where(better, UL, best_UL)
+                better = Q > best.Q
+                best.Q = np.where(better, Q, best.Q)
+                best.s_star = np.where(better, sig, best.s_star)
+                best.UA = np.where(better, R, best.UA)
+                best.UL = np.where(better, UL, best.UL)
                 if progress is not None:
                     progress(j + 1, total_steps)
-    t["lattice_sweeps"] = time.perf_counter() - t0
-    lattice_Q = best_Q.copy()
+    return best
 
-    # Step 3: per-pair bounds on the strict spans, refined where they can still change
-    # the answer; exact method where the budget runs out.
-    t0 = time.perf_counter()
-    Q = np.zeros(len(idx))
-    s_star = np.full(len(idx), np.nan)
-    UA = np.zeros(len(idx))
-    UL = np.zeros(len(idx))
-    upper = np.zeros(len(idx))
-    settled = np.full(len(idx), "zero", dtype=object)
-    exact = np.zeros(len(idx), bool)
-    xg = sign * grid
-    g_order = np.argsort(xg, kind="stable")
-    xg = xg[g_order]
-    starts = np.searchsorted(span_i, strict_local)
-    ends = np.searchsorted(span_i, strict_local, side="right")
+
+def _settle_by_bounds(rows: _Rows, spans: _Spans, lat: _Rows, idx: np.ndarray, k: np.ndarray,
+                      xg: np.ndarray, eps: float, lam: float, max_evaluations: int,
+                      progress: Callable[[int, int], None] | None, done: int,
+                      total_steps: int) -> list[int]:
+    """Step 3: per-pair bounds on the strict spans (:func:`_settle_pair`); rows not better
+    than the lattice keep its values. Returns the pairs left to the exact method."""
     fallback = []
-    for n, (i, a0, a1) in enumerate(zip(strict_local, starts, ends)):
-        spans = [(float(out_a[j]), float(out_b[j]), bool(out_ao[j]), bool(out_bo[j]))
-                 for j in range(a0, a1)]
-        j0, j1 = np.searchsorted(xg, [x_lo[i] - tol, x_hi[i] + tol])
-        res = _settle_pair(ws, int(idx[i]), float(C[i]), float(eps), lam, float(tols[i]),
-                           spans, xg[j0:j1], int(max_evaluations))
+    for n, i in enumerate(spans.strict_pairs):
+        j0, j1 = np.searchsorted(xg, [spans.x_lo[i] - spans.tol, spans.x_hi[i] + spans.tol])
+        res = _settle_pair(spans.ws, int(idx[i]), float(spans.C[i]), float(eps), lam,
+                           float(spans.tols[i]), spans.of_pair(n), xg[j0:j1], int(max_evaluations))
         if res.ok:
-            settled[i] = "bounds"
-            upper[i] = max(res.upper, lattice_Q[i])
-            if res.Q > lattice_Q[i] * (1.0 + 1e-12):
-                Q[i] = res.Q
-                s_star[i] = sign * res.x
-                Es = 0.5 * kk[i] * max(x_hi[i] - res.x, 0.0) ** 2
-                UA[i] = res.B - Es if math.isfinite(res.B) else math.inf
-                UL[i] = C[i] - Es
+            rows.settled[i] = "bounds"
+            rows.upper[i] = max(res.upper, lat.Q[i])
+            if res.Q > lat.Q[i] * (1.0 + 1e-12):
+                rows.Q[i] = res.Q
+                rows.s_star[i] = spans.sign * res.x
+                Es = 0.5 * k[idx[i]] * max(spans.x_hi[i] - res.x, 0.0) ** 2
+                rows.UA[i] = res.B - Es if math.isfinite(res.B) else math.inf
+                rows.UL[i] = spans.C[i] - Es
             else:              # nothing better than the lattice: keep its row as it was
-                Q[i], s_star[i], UA[i], UL[i] = lattice_Q[i], best_s[i], best_UA[i], best_UL[i]
+                rows.Q[i], rows.s_star[i] = lat.Q[i], lat.s_star[i]
+                rows.UA[i], rows.UL[i] = lat.UA[i], lat.UL[i]
         else:
             fallback.append(i)
         if progress is not None:
-            progress(len(grid) + n + 1, total_steps)
-    t["settle_bounds"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    for i in fallback:
-        r = optimize_separation_arrays(sigma0, k, graph, int(idx[i]), float(sigma_L[i]), mode=mode,
-                                       method="exact", n_curve=2)
-        _set_exact(i, r, Q, s_star, UA, UL, upper, settled, exact)
-    t["settle_exact"] = time.perf_counter() - t0
+            progress(done + n + 1, total_steps)
+    return fallback
 
-    # The `top` pairs (not pulling, unless allowed) with the exact method, full reports.
+
+def _refine_top(mesh, model: GraspModel, idx: np.ndarray, rows: _Rows, top: int,
+                allow_pulling: bool, mode: str, jaw_width: float) -> list[GraspAnalysis]:
+    """The ``top`` pairs (not pulling, unless allowed) by the exact method, full reports;
+    their rows take its values. Best first (stable: ties keep their order)."""
     pulls = model.pulls[idx]
-    order = np.argsort(-Q, kind="stable")
     refined: list[GraspAnalysis] = []
-    t0 = time.perf_counter()
-    for i in order:
-        if len(refined) >= int(top) or Q[i] <= 0:
+    for i in np.argsort(-rows.Q, kind="stable"):
+        if len(refined) >= int(top) or rows.Q[i] <= 0:
             break
         if pulls[i] and not allow_pulling:
             continue
-        a, b = graph.pairs[idx[i]]
+        a, b = model.graph.pairs[idx[i]]
         r = optimize_separation(mesh, (int(a), int(b)), method="exact", mode=mode,
                                 jaw_width=jaw_width, model=model)
         refined.append(r)
-        _set_exact(i, r.separation, Q, s_star, UA, UL, upper, settled, exact)
-    t["refine_exact"] = time.perf_counter() - t0
-    refined.sort(key=lambda r: -r.quality)               # stable: ties keep their order
-    rank = np.argsort(-Q, kind="stable")
-    pairs = graph.pairs[idx[rank]]
+        rows.set_exact(i, r.separation)
+    refined.sort(key=lambda r: -r.quality)
+    return refined
+
+
+def _settle_rows(mesh, model: GraspModel, idx: np.ndarray, sigma_L: np.ndarray, grid: np.ndarray,
+                 eps: float, lam: float, mode: str, max_evaluations: int,
+                 progress: Callable[[int, int], None] | None, t: dict
+                 ) -> tuple[_Rows, _Rows, _Spans]:
+    """Steps 1–3 of the module docstring: the rows of every selected pair, the lattice's
+    best values, and the strict spans (timings into ``t``)."""
+    graph, sigma0, k = model.graph, model.stiffness.sigma0, model.stiffness.k
+    with _timed(t, "strict_spans"):               # step 1: strict spans, every pair
+        spans = _strict_spans(graph, sigma0, k, sigma_L, idx, mode)
+    total_steps = len(grid) + len(spans.strict_pairs)
+    with _timed(t, "lattice_sweeps"):             # step 2: the coarse shared lattice
+        lat = _lattice_sweep(graph, sigma0, k, sigma_L, idx, mode, grid, progress, total_steps)
+    rows = _Rows.zeros(len(idx))
+    with _timed(t, "settle_bounds"):              # step 3: per-pair bounds, else exact
+        xg = np.sort(spans.sign * grid, kind="stable")
+        fallback = _settle_by_bounds(rows, spans, lat, idx, k, xg, eps, lam, max_evaluations,
+                                     progress, len(grid), total_steps)
+    with _timed(t, "settle_exact"):
+        for i in fallback:
+            rows.set_exact(i, optimize_separation_arrays(sigma0, k, graph, int(idx[i]),
+                                                         float(sigma_L[i]), mode=mode,
+                                                         method="exact", n_curve=2))
+    return rows, lat, spans
+
+
+@contextmanager
+def _timed(t: dict, key: str):
+    """Record the seconds the block takes as ``t[key]``."""
+    t0 = time.perf_counter()
+    yield
+    t[key] = time.perf_counter() - t0
+
+
+def plan_grasps(mesh, K: sp.spmatrix | None = None, *, eps: float | None = None,
+                mode: str = "contracting", jaw_width: float = 0.0,
+                separation_range: tuple[float, float] | None = None,
+                regions: Sequence[Any] | None = None, top: int = 10,
+                n_sigma: int = 400, max_sigma: int = 200_000,
+                progress: Callable[[int, int], None] | None = None,
+                model: GraspModel | None = None, allow_pulling: bool = False,
+                max_evaluations: int = 4000) -> PlanResult:
+    """Rank every jaw pair of a part, each pair's quality within ε of its optimum:
+    ``quality ≤ Q* ≤ quality_upper ≤ quality + ε`` on every row (module docstring).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Meshed part with material.
+    K : sparse matrix, optional
+        Stiffness (N/m); assembled if omitted.
+    eps : float, optional
+        ε (J). Default: about ``n_sigma`` shared lattice points over the range (reported).
+    mode : {"contracting", "expanding"}
+    jaw_width : float
+        Jaw contact width (m).
+    separation_range : (float, float), optional
+        Keep pairs whose rest distance σ0 (m) lies in this range.
+    regions : sequence, optional
+        Keep pairs with both jaw nodes in these boxes ``(xmin, ymin, xmax, ymax)`` (m) or
+        shapely geometries.
+    top : int
+        Number of best pairs refined with the exact method (``refined``).
+    n_sigma, max_sigma : int
+        Size of the coarse shared lattice (and the default ε); the largest accepted.
+    progress : callable, optional
+        ``progress(done, total)`` after each lattice value and each pair settled by bounds.
+    model : GraspModel, optional
+        Reuse a model from :func:`grasp_model`.
+    allow_pulling : bool
+        Let pairs flagged ``pulls`` (a jaw would have to pull) into ``refined``.
+    max_evaluations : int
+        Escape-level evaluations one pair may use before it is solved exactly instead.
+
+    Returns
+    -------
+    PlanResult
+
+    Raises
+    ------
+    GraspError
+        Bad ε, range, regions, or no pair left after filtering.
+
+    Examples
+    --------
+    >>> from deformclosure import demo_part, mesh_part
+    >>> plan = plan_grasps(mesh_part(demo_part(max_area_mm2=20.0)), top=1)
+    >>> bool(np.all(np.diff(plan.quality) <= 0)), len(plan.refined)      # best first
+    (True, 1)
+    """
+    _check_plan_options(eps, top, max_evaluations)
+    model = model if model is not None else grasp_model(mesh, K, mode=mode, jaw_width=jaw_width)
+    t = dict(model.timings)
+    idx = _selected_pairs(mesh, model, separation_range, regions)
+    if mesh.material is None:
+        raise GraspError("no material: the elastic-limit strain e_L is unknown")
+    with _timed(t, "elastic_limits"):
+        e_max, sigma_L = pair_elastic_limits(model, idx, mesh.material.elastic_limit_strain)
+    sigma0, k = model.stiffness.sigma0, model.stiffness.k
+    lam, eps, step, grid = _shared_lattice(mode, sigma0, k, sigma_L, idx, eps, n_sigma, max_sigma)
+    rows, lat, spans = _settle_rows(mesh, model, idx, sigma_L, grid, eps, lam, mode,
+                                    max_evaluations, progress, t)
+    with _timed(t, "refine_exact"):
+        refined = _refine_top(mesh, model, idx, rows, top, allow_pulling, mode, jaw_width)
+    rank = np.argsort(-rows.Q, kind="stable")
+    pairs = model.graph.pairs[idx[rank]]
     return PlanResult(
         pairs=pairs, sigma0=sigma0[idx[rank]], k=k[idx[rank]], e_max=e_max[rank],
-        sigma_L=sigma_L[rank], sigma_star=s_star[rank], quality=Q[rank],
-        U_A=UA[rank], U_L=UL[rank], pulls=pulls[rank],
-        lattice_quality=lattice_Q[rank], exact=exact[rank], epsilon=float(eps),
+        sigma_L=sigma_L[rank], sigma_star=rows.s_star[rank], quality=rows.Q[rank],
+        U_A=rows.UA[rank], U_L=rows.UL[rank], pulls=model.pulls[idx][rank],
+        lattice_quality=lat.Q[rank], exact=rows.exact[rank], epsilon=float(eps),
         lipschitz=lam, step=step, n_sigma=len(grid), refined=refined, mode=mode,
-        jaw_width=float(jaw_width), timings=t, model=model, quality_upper=upper[rank],
-        settled=np.asarray(settled[rank], dtype=str), jaw_xy=mesh.nodes[pairs],
-        allow_pulling=bool(allow_pulling), n_evaluations=int(ws.n_eval))
-
-
-def _set_exact(i: int, r, Q, s_star, UA, UL, upper, settled, exact) -> None:
-    """Row ``i`` takes the exact method's values (``r`` a SeparationResult)."""
-    Q[i] = r.quality
-    upper[i] = r.quality
-    s_star[i] = np.nan if r.sigma_star is None else r.sigma_star
-    UA[i] = math.inf if r.U_A_infinite else (0.0 if r.U_A is None else r.U_A)
-    UL[i] = r.U_L
-    settled[i] = "exact"
-    exact[i] = True
+        jaw_width=float(jaw_width), timings=t, model=model, quality_upper=rows.upper[rank],
+        settled=np.asarray(rows.settled[rank], dtype=str), jaw_xy=mesh.nodes[pairs],
+        allow_pulling=bool(allow_pulling), n_evaluations=int(spans.ws.n_eval))
