@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from deformclosure.cli.common import write_json
+from deformclosure.outputs import write_json
 from deformclosure.cli.main import main
 from deformclosure.errors import DeformClosureError
 from deformclosure.outputs import atomic_path, write_text_atomic
@@ -53,7 +53,7 @@ def test_plot_folder_under_a_file_is_one_line(tmp_path, capsys):
 
 def test_full_disk_keeps_the_previous_file(tmp_path, monkeypatch):
     target = tmp_path / "report.json"
-    write_json({"quality": 1.0}, target)
+    write_json(target, {"quality": 1.0})
     before = target.read_bytes()
     real = Path.write_text
 
@@ -63,7 +63,7 @@ def test_full_disk_keeps_the_previous_file(tmp_path, monkeypatch):
 
     monkeypatch.setattr(Path, "write_text", full)
     with pytest.raises(DeformClosureError, match="No space left"):
-        write_json({"quality": 2.0}, target)
+        write_json(target, {"quality": 2.0})
     monkeypatch.undo()
     assert target.read_bytes() == before and json.loads(before)["quality"] == 1.0
     assert [p.name for p in tmp_path.iterdir()] == ["report.json"]   # no temporary left
@@ -84,12 +84,12 @@ def test_atomic_write_keeps_permissions_and_cleans_up_on_error(tmp_path):
 
 WRITER = """
 import sys
-from deformclosure.cli.common import write_json
+from deformclosure.outputs import write_json
 big = {"rows": [{"i": i, "x": [float(j) for j in range(40)]} for i in range(4000)]}
 k = 0
 while True:
     big["k"] = k
-    write_json(big, sys.argv[1])
+    write_json(sys.argv[1], big)
     k += 1
 """
 
@@ -98,7 +98,7 @@ def test_sigkill_during_writes_never_leaves_a_broken_report(tmp_path):
     """A process rewriting a ~1.7 MB report is killed at random moments: the report on
     disk always parses, as the previous or the new version."""
     target = tmp_path / "plan.json"
-    write_json({"k": -1}, target)
+    write_json(target, {"k": -1})
     for delay in (0.35, 0.5, 0.8, 1.1):
         proc = subprocess.Popen([sys.executable, "-c", WRITER, str(target)])
         time.sleep(delay)

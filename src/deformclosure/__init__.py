@@ -3,38 +3,84 @@
 Implements and extends K. Gopalakrishnan and K. Goldberg, "D-Space and Deform Closure
 Grasps of Deformable Parts", International Journal of Robotics Research 24(11), 2005.
 
-The top level re-exports the core pipeline; plotting and the CLI are imported lazily
-from their own subpackages.
+The public API (SPEC §5) is importable from the top level; each name is loaded from its
+home module on first use (PEP 562), so ``import deformclosure`` stays light — no numpy,
+scipy, numba, matplotlib, click, sqlite3 or multiprocessing until they are needed.
+
+Layers, low to high (no module imports one above it at import time)::
+
+    errors, choices, geometry, units, jsonfile, outputs, log     foundation
+    part, drawing, mesh                                           inputs
+    elasticity                                                    stiffness, solves
+    grasp (paper model), dspace (fingers), pads, fields, limits   models
+    planning, plotting                                            planners, pictures
+    reports (one function per command), batch                     commands as a library
+    cli                                                           the shell
+
+Examples
+--------
+>>> import deformclosure as dc
+>>> part = dc.Part.from_dict({"units": "mm", "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
+...     "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1,
+...                  "elastic_limit_strain": 0.8}, "mesh": {"max_area": 4}})
+>>> mesh = dc.mesh_part(part)
+>>> mesh.n_nodes > 20
+True
 """
 
-from importlib.metadata import PackageNotFoundError, version
+from __future__ import annotations
 
-from .elasticity import (FreeBodySolver, element_strains, principal_strains, read_stiffness,
-                         rigid_modes, stiffness_matrix, strain_magnitude)
-from .errors import (BatchError, DeformClosureError, FingerError, GraspError, MeshError,
-                     PartError, StiffnessError)
-from .grasp import (ContactGraph, GraspAnalysis, contact_graph, grasp_model, optimize_separation,
-                    pair_stiffness, release_energies, release_energy)
-from .dspace.escape import FingerRelease, release_energy_fingers
-from .mesh import Mesh, mesh_part, read_mesh, write_mesh
-from .part import Material, MeshOptions, Part, demo_part, notched_part
+import importlib
+from typing import Any
 
-from .planning.plan import PlanResult, plan_grasps  # noqa: E402
+#: Public name -> the module that is its home.
+_HOMES = {
+    # inputs
+    "Part": "part", "Material": "part", "MeshOptions": "part", "demo_part": "part",
+    "notched_part": "part", "read_material": "part",
+    "part_from_drawing": "drawing", "read_drawing": "drawing",
+    "Source": "jsonfile",
+    "Mesh": "mesh", "mesh_part": "mesh", "read_mesh": "mesh", "write_mesh": "mesh",
+    # elasticity
+    "stiffness_matrix": "elasticity", "element_strains": "elasticity",
+    "principal_strains": "elasticity", "strain_magnitude": "elasticity",
+    "FreeBodySolver": "elasticity", "rigid_modes": "elasticity", "read_stiffness": "elasticity",
+    # the paper's two-jaw model (SPEC §4)
+    "pair_stiffness": "grasp", "contact_graph": "grasp", "ContactGraph": "grasp",
+    "release_energy": "grasp", "release_energies": "grasp", "grasp_model": "grasp",
+    "optimize_separation": "grasp", "GraspAnalysis": "grasp",
+    "plan_grasps": "planning.plan", "PlanResult": "planning.plan",
+    # any finger set (SPEC §2, §3, §7)
+    "load_fingers": "dspace", "PointFinger": "dspace", "DiscFinger": "dspace",
+    "PolygonFinger": "dspace", "HalfPlaneFinger": "dspace", "Finger": "dspace",
+    "deform_closure": "dspace", "dfree_slice": "dspace", "equilibrium": "dspace",
+    "release_energy_fingers": "dspace", "FingerRelease": "dspace",
+    # pads (SPEC §6)
+    "Pad": "pads", "GraspAxis": "pads", "pad_grasp": "pads",
+    # errors
+    "DeformClosureError": "errors", "PartError": "errors", "MeshError": "errors",
+    "StiffnessError": "errors", "GraspError": "errors", "FingerError": "errors",
+    "BatchError": "errors",
+}
 
-try:
-    __version__ = version("deformclosure")
-except PackageNotFoundError:  # pragma: no cover - running from a source tree
-    __version__ = "0.0.0"
+__all__ = ["__version__", *_HOMES]
 
-__all__ = [
-    "__version__",
-    "Part", "Material", "MeshOptions", "demo_part", "notched_part",
-    "Mesh", "mesh_part", "read_mesh", "write_mesh",
-    "stiffness_matrix", "element_strains", "principal_strains", "strain_magnitude",
-    "FreeBodySolver", "rigid_modes", "read_stiffness",
-    "pair_stiffness", "contact_graph", "ContactGraph", "release_energy", "release_energies",
-    "grasp_model", "optimize_separation", "GraspAnalysis", "plan_grasps", "PlanResult",
-    "release_energy_fingers", "FingerRelease",
-    "DeformClosureError", "PartError", "MeshError", "StiffnessError", "GraspError",
-    "FingerError", "BatchError",
-]
+
+def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            value = version("deformclosure")
+        except PackageNotFoundError:  # pragma: no cover - running from a source tree
+            value = "0.0.0"
+    elif name in _HOMES:
+        value = getattr(importlib.import_module(f".{_HOMES[name]}", __name__), name)
+    else:
+        raise AttributeError(f"module 'deformclosure' has no attribute {name!r}")
+    globals()[name] = value          # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

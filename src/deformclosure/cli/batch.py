@@ -63,7 +63,7 @@ def command(jobs, db, job_command, job_options, scheduler, workers, retry_failed
 
     One row per job in an SQLite results file, committed as each job finishes.
     """
-    from ..planning.batch import BatchInterrupted, load_jobs, run_batch
+    from ..batch import BatchInterrupted, load_jobs, run_batch
 
     job_list = load_jobs(jobs, command=job_command, options=job_options,
                          allow_outside=allow_outside)

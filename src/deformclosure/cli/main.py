@@ -10,7 +10,6 @@ import sys
 
 import click
 
-from .. import __version__
 from ..errors import DeformClosureError
 
 __all__ = ["cli", "main", "run"]
@@ -28,7 +27,7 @@ Examples:
 
 
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="deformclosure")
+@click.version_option(package_name="deformclosure", prog_name="deformclosure")
 def cli() -> None:
     """How well do rigid jaws or fingers hold a deformable planar part?
 
@@ -70,21 +69,10 @@ def main(argv: list[str] | None = None) -> int:
     real_stdout = sys.stdout
     if _report_to_stdout(args):
         common.REPORT_STDOUT, sys.stdout = real_stdout, sys.stderr
-    token = common.INPUTS.set(tuple(_input_files(args)))
     try:
         return _main(args)
     finally:
         sys.stdout, common.REPORT_STDOUT = real_stdout, None
-        common.INPUTS.reset(token)
-
-
-def _input_files(argv: list[str]) -> list[str]:
-    """The existing regular files named on the command line, outputs excluded."""
-    import os
-
-    outputs = {argv[i + 1] for i, a in enumerate(argv[:-1])
-               if a in ("-o", "--output", "--plot", "--export-graph", "--out")}
-    return [a for a in argv if a not in outputs and not a.startswith("-") and os.path.isfile(a)]
 
 
 def _main(argv: list[str]) -> int:

@@ -37,7 +37,7 @@ def command(db, fmt, status, output) -> int:
     """List a batch's results, or export them as CSV or JSON."""
     from ..errors import BatchError
     from ..outputs import atomic_path, check_outputs
-    from ..planning.batch import format_results, read_results
+    from ..batch import format_results, read_results
 
     check_outputs([output], [], [db])
     rows = read_results(db, status=status)

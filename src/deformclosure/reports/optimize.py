@@ -1,0 +1,263 @@
+"""``optimize``: the optimal separation σ* of one two-jaw grasp, with pads (SPEC §6, the
+default) or with the paper's point jaws at mesh nodes (SPEC §4, for reproduction)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GraspError
+from .base import Report, provenance, write_report
+from .inputs import (check_eps, check_grid, check_jaw_width, only_for, pad_from_options,
+                     parse_numbers, parse_xy, read_inputs)
+
+__all__ = ["run", "parse_axis", "paper_state"]
+
+
+def run(part, params: dict, progress=None, notify=None) -> Report:
+    """Optimise one grasp. ``model`` defaults to ``pads`` (``paper`` when ``jaws`` is
+    given); lengths in ``units`` (default the part's); ``eps`` in J."""
+    from ..fields import check_field_path
+
+    p = params
+    if p["export_fields"] is not None:
+        check_field_path(p["export_fields"])
+    model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
+    if model == "paper":
+        return _paper(part, p)
+    only_for("paper", [("--jaws", p["jaws"] is not None), ("--jaw-width", p["jaw_width"] != 0.0),
+                       ("--eps", p["eps"] is not None),
+                       ("--export-graph", p["export_graph"] is not None),
+                       ("--method", p["method"] != "exact")],
+             "add --model paper, or give the pads an axis with --at X,Y X,Y or --axis X,Y,DEG")
+    return _pads(part, p, notify)
+
+
+def parse_axis(at, axis, scale: float):
+    """The grasp axis from ``--at X,Y X,Y`` or ``--axis X,Y,DEG`` (lengths × ``scale`` → m)."""
+    from ..pads import GraspAxis
+
+    if (at is None) == (axis is None):
+        raise GraspError("axis: give exactly one of --at X,Y X,Y (two points on the closing axis) "
+                         "or --axis X,Y,DEG (a point and the closing direction in degrees)")
+    if at is not None:
+        p, q = (np.array(parse_xy(v, "--at")) * scale for v in at)
+        return GraspAxis.through(p, q)
+    x, y, deg = parse_numbers(axis, 3, "--axis", "X,Y,DEG")
+    return GraspAxis.at(np.array([x, y]) * scale, np.radians(deg))
+
+
+def _axis_start(at, axis, scale: float):
+    """Where expanding pads start: the --at mid-point or the --axis point (m)."""
+    if at is not None:
+        return 0.5 * sum(np.array(parse_xy(v, "--at")) for v in at) * scale
+    return np.array(parse_numbers(axis, 3, "--axis", "X,Y,DEG")[:2]) * scale
+
+
+# ----------------------------------------------------------------------------- pads
+
+
+def _pads(part, p: dict, notify) -> Report:
+    from ..limits import check_model_size
+    from ..pads import pad_grasp
+
+    check_grid(p["grid_angles"], p["grid_offsets"])
+    inp = read_inputs(part, p["units"], p["material"])
+    check_model_size(inp.mesh, "pads", solvers=1 if inp.part is None else 2, refine=p["refine"],
+                     n_axes=p["grid_angles"] * p["grid_offsets"])
+    scale = inp.scale
+    ax = parse_axis(p["at"], p["axis"], scale)
+    pad = pad_from_options(p["pad_radius"], p["pad_width"], scale, inp.mesh.diameter)
+
+    def progress(k: int, n: int) -> None:
+        if notify is not None and n > 1:
+            notify(f"mesh {k + 1} of {n} ...")
+
+    start = _axis_start(p["at"], p["axis"], scale) if p["expanding"] else None
+    res = pad_grasp(inp.part, ax, pad, mesh=inp.mesh, refine=p["refine"], progress=progress,
+                    expanding_from=start, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"])
+    data = {**res.to_dict(), "provenance": provenance(inp.sources)}
+    lines = _pads_lines(res, data, pad, inp.unit, scale)
+    rep = Report("optimize", data, lines, inp.warnings + list(res.finest.warnings), p, res,
+                 _pads_writer(inp))
+    return rep
+
+
+def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
+    """The summary printed for people, lengths in the part's units."""
+    fine, s = res.finest, 1.0 / scale
+    lines = [f"model: pads, W = {pad.width * s:.4g} {unit}, rho = {pad.radius * s:.4g} {unit}; "
+             f"axis through ({fine.axis.point[0] * s:.4g}, {fine.axis.point[1] * s:.4g}) {unit} "
+             f"at {np.degrees(fine.axis.angle):.4g} deg",
+             f"sigma0 = {fine.sigma0 * s:.6g} {unit}  sigma_L = {fine.sigma_L * s:.6g} {unit}  "
+             f"(critical distance {fine.limit.critical_distance * s:.3g} {unit})"]
+    if fine.sigma_star is None:
+        lines.append("Q = 0 on the whole range: no barrier above the noise floor "
+                     f"({fine.noise_relative:.2%} of U)")
+    else:
+        ua = "infinite" if np.isinf(fine.U_A) else f"{fine.U_A:.6g} J"
+        lines.append(f"sigma* = {fine.sigma_star * s:.6g} {unit}  Q* = {fine.quality:.6g} J  "
+                     f"U_A = {ua}  U_L = {fine.U_L:.6g} J  (noise floor {fine.noise:.3g} J)")
+    if "convergence" in data:
+        lines.append(f"{'max_area (' + unit + '^2)':>18} {'nodes':>7} "
+                     f"{'sigma* (' + unit + ')':>14} {'Q* (J)':>12}")
+        for row in data["convergence"]:
+            ss = "-" if row["sigma_star"] is None else f"{row['sigma_star'] * s:.6g}"
+            lines.append(f"{row['max_area'] * s * s:>18.4g} {row['nodes']:>7} {ss:>14} "
+                         f"{row['quality']:>12.5g}")
+        e = data["error_estimate"]
+        es = "-" if e["sigma_star"] is None else f"{e['sigma_star'] * s:.3g} {unit}"
+        lines.append(f"error estimate (Richardson): Q* ± {e['quality']:.3g} J, sigma* ± {es}")
+    lines.append(f"verdict: {data['verdict'].upper()}")
+    return lines
+
+
+def _pads_writer(inp):
+    def write(rep: Report, report: bool) -> list[str]:
+        write_report(rep, report)
+        fine, p, written = rep.result.finest, rep.params, []
+        if p["export_fields"]:
+            from ..fields import write_fields
+
+            sigmas = ([("sigma_star", fine.sigma_star)] if fine.sigma_star is not None else []) \
+                + [("sigma_L", fine.sigma_L)]
+            states = [fine.state_at(sig, label) for label, sig in sigmas]
+            written += write_fields(p["export_fields"], fine.solver.mesh, states,
+                                    fine.limit.critical_distance)
+        if p["plot"]:
+            from ..plotting.pads import save_pad_plots
+
+            written += save_pad_plots(fine, inp.mesh, p["plot"],
+                                      units=inp.unit if inp.unit != "m" else "mm")
+        return [str(w) for w in written]
+
+    return write
+
+
+# ----------------------------------------------------------------------------- paper
+
+
+def _paper_inputs(part, p: dict):
+    """The mesh with the --at points inserted as nodes, the jaw nodes, and the inputs."""
+    at = p["at"]
+    inp = read_inputs(part, p["units"], p["material"], mesh=False)   # a mesh file: its mesh
+    pts = None if not at else np.array([parse_xy(v, "--at") for v in at]) * inp.scale
+    if inp.part is not None:
+        _check_near(inp, pts, at)
+        inp.mesh = _mesh_with_jaws(inp, pts, at)
+    if pts is not None:
+        jaws = tuple(inp.mesh.find_node(q, tol=1e-6 * inp.mesh.diameter) for q in pts)
+    else:
+        jaws = tuple(p["jaws"])
+    return inp, jaws
+
+
+def _check_near(inp, pts, at) -> None:
+    if pts is None:
+        return
+    far = 100 * inp.part.diameter + float(np.abs(inp.part.outer).max())
+    if np.abs(pts).max() > far:
+        raise GraspError(f"--at: a jaw position is far outside the part ({', '.join(at)} "
+                         f"{inp.unit}); check the values and --units")
+
+
+def _mesh_with_jaws(inp, pts, at):
+    from ..mesh import mesh_part
+    from ..part import PartError
+
+    try:
+        return mesh_part(inp.part, points=pts)
+    except PartError as err:   # name the option, not the mesher's internal point list
+        if "points[" not in str(err):
+            raise
+        raise GraspError(f"--at: a jaw position lies outside the part "
+                         f"({', '.join(at)} {inp.unit}); move it onto the part's boundary") from None
+
+
+def _paper(part, p: dict) -> Report:
+    """The paper's two-jaw model (SPEC §4), unchanged."""
+    from ..grasp.analysis import grasp_model, optimize_separation
+    from ..limits import check_model_size
+
+    if (p["jaws"] is None) == (p["at"] is None):
+        raise GraspError("jaws: give exactly one of --jaws A B (node ids) or --at X,Y X,Y (positions)")
+    check_eps(p["eps"])
+    check_jaw_width(p["jaw_width"])
+    inp, jaws = _paper_inputs(part, p)
+    mesh, mode = inp.mesh, "expanding" if p["expanding"] else "contracting"
+    check_model_size(mesh, "paper", mode=mode)
+    width = p["jaw_width"] * inp.scale
+    if width > mesh.diameter:
+        raise GraspError(f"--jaw-width = {p['jaw_width']:g} {inp.unit}: wider than the part "
+                         f"({mesh.diameter / inp.scale:.4g} {inp.unit}); check the value and --units")
+    model = grasp_model(mesh, mode=mode, jaw_width=width)
+    res = optimize_separation(mesh, jaws, method=p["method"], eps=p["eps"], mode=mode,
+                              jaw_width=width, model=model)
+    data = {**res.to_dict(), "provenance": provenance(inp.sources)}
+    return Report("optimize", data, _paper_lines(res, data, jaws, p["method"], inp),
+                  inp.warnings, p, res, _paper_writer(inp, jaws, model))
+
+
+def _paper_lines(res, data: dict, jaws, method: str, inp) -> list[str]:
+    s, unit, lim = 1.0 / inp.scale, inp.unit, res.limit
+    lines = [f"jaws: nodes {jaws[0]}, {jaws[1]}  sigma0 = {lim.sigma0 * s:.6g} {unit}  "
+             f"k01 = {lim.k01:.6g} N/m  e_max = {lim.e_max:.6g} 1/m",
+             f"sigma_L = {lim.sigma_L * s:.6g} {unit}"]
+    if res.sigma_star is None:
+        lines.append("this jaw pair cannot hold the part: Q = 0 on the whole range")
+    else:
+        ua = ("infinite (no other equilibrium reachable)" if data["U_A_infinite"]
+              else f"{data['U_A']:.6g} J")
+        lines.append(f"sigma* = {res.sigma_star * s:.6g} {unit}  Q* = {res.quality:.6g} J  "
+                     f"U_A = {ua}  U_L = {data['U_L']:.6g} J  ({method}, "
+                     f"{res.separation.n_evaluations} U_A evaluations)")
+    if data.get("pulls"):
+        lines.append("note: the jaw line leaves the part at a jaw (a jaw would have to pull); "
+                     "the linear model still applies the force along the jaw line")
+    return lines
+
+
+def _paper_writer(inp, jaws, model):
+    def write(rep: Report, report: bool) -> list[str]:
+        from ..outputs import write_json
+
+        write_report(rep, report)
+        res, p, written = rep.result, rep.params, []
+        if p["export_graph"]:
+            write_json(p["export_graph"], model.graph.to_dict(
+                model.stiffness.sigma0, model.stiffness.k, pulls=model.pulls), "graph", indent=None)
+        if p["export_fields"]:
+            from ..fields import write_fields
+            from ..pads.limit import critical_distance_of
+
+            sigmas = ([("sigma_star", res.sigma_star)] if res.sigma_star is not None else []) \
+                + [("sigma_L", res.limit.sigma_L)]
+            states = [paper_state(res, jaws, sig, label) for label, sig in sigmas]
+            written += write_fields(p["export_fields"], inp.mesh, states,
+                                    critical_distance_of(inp.mesh))
+        if p["plot"]:
+            from ..plotting.grasp import save_grasp_plots
+
+            written += save_grasp_plots(res, p["plot"], units=inp.unit if inp.unit != "m" else "mm")
+        return [str(w) for w in written]
+
+    return write
+
+
+def paper_state(res, jaws: tuple[int, int], sigma: float, label: str):
+    """The paper model's state at separation ``sigma`` (m): the linear displacement field
+    of the jaw pair for the squeeze ``|σ0 − σ|`` and the jaw forces ``k01 δ`` along the jaw
+    line (SPEC §4), as a :class:`deformclosure.fields.FieldState`."""
+    from ..fields import FieldState
+
+    lim = res.limit
+    mesh = res.model.mesh
+    delta = abs(lim.sigma0 - sigma)
+    sign = -1.0 if res.model.mode == "expanding" else 1.0
+    u = sign * lim.displacement_per_length * delta
+    a, b = jaws
+    d = mesh.nodes[b] - mesh.nodes[a]
+    d = d / np.linalg.norm(d)
+    forces = np.zeros((mesh.n_nodes, 2))
+    forces[a] = sign * lim.k01 * delta * d          # jaw a pushes towards b (contracting)
+    forces[b] = -forces[a]
+    return FieldState(label, u, forces)

@@ -1,0 +1,163 @@
+"""``plan``: rank the grasps of a part, grasp axes for pads (SPEC §6, the default) or
+every pair of perimeter nodes for the paper's point jaws (SPEC §4)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GraspError
+from .base import Report, provenance, write_report
+from .inputs import (check_eps, check_grid, check_jaw_width, only_for, pad_from_options,
+                     parse_numbers, read_inputs)
+
+__all__ = ["run"]
+
+
+def run(part, params: dict, progress=None, notify=None) -> Report:
+    """Plan the grasps of ``part``; ``top`` best refined exactly; lengths in ``units``."""
+    p = params
+    if p["top"] < 0:
+        raise GraspError(f"--top = {p['top']}: must be >= 0")
+    if p["model"] == "pads":
+        only_for("paper", [("--eps", p["eps"] is not None), ("--expanding", p["expanding"]),
+                           ("--jaw-width", p["jaw_width"] != 0.0),
+                           ("--min-sep", p["min_sep"] is not None),
+                           ("--max-sep", p["max_sep"] is not None),
+                           ("--region", bool(p["region"])),
+                           ("--allow-pulling", p["allow_pulling"])], "add --model paper")
+        return _pads(part, p, progress)
+    return _paper(part, p, progress)
+
+
+# ----------------------------------------------------------------------------- pads
+
+
+def _pads(part, p: dict, progress) -> Report:
+    from ..limits import check_model_size
+    from ..pads import PadContact
+    from ..pads.noise import twin_mesh
+    from ..pads.plan import plan_pads
+
+    check_grid(p["grid_angles"], p["grid_offsets"])
+    inp = read_inputs(part, p["units"])
+    check_model_size(inp.mesh, "pads", solvers=1 if inp.part is None else 2,  # before the work
+                     n_axes=p["grid_angles"] * p["grid_offsets"])
+    pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
+    twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
+    res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
+                    top=p["top"], twin=twin, progress=progress)
+    data = {**res.to_dict(), "provenance": provenance(inp.sources)}
+    return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
+                  (res, inp), _pads_writer)
+
+
+def _pads_lines(res, pad, top: int, inp) -> list[str]:
+    s, unit = 1.0 / inp.scale, inp.unit
+    lines = [f"{len(res.rows)} grasp axes (pads W = {pad.width * s:.4g}, rho = "
+             f"{pad.radius * s:.4g} {unit})",
+             f"{'rank':>4} {'angle':>7} {'contact A (' + unit + ')':>20} {'contact B':>18} "
+             f"{'sigma*':>9} {'Q (J)':>11} {'verdict':>9} {'method':>8}"]
+    for i, r in enumerate(res.rows[:max(top, 5)]):
+        ca, cb = (np.asarray(c) * s for c in r["contacts"])
+        ss = "-" if r["sigma_star"] is None else f"{r['sigma_star'] * s:.4g}"
+        lines.append(f"{i + 1:>4} {np.degrees(r['angle']):>6.1f}° {ca[0]:>9.4g},{ca[1]:<9.4g} "
+                     f"{cb[0]:>8.4g},{cb[1]:<8.4g} {ss:>9} {r['quality']:>11.4g} "
+                     f"{r['verdict']:>9} {r['method']:>8}")
+    return lines
+
+
+def _pads_writer(rep: Report, report: bool) -> list[str]:
+    write_report(rep, report)
+    res, inp = rep.result
+    if not rep.params["plot"]:
+        return []
+    from pathlib import Path
+
+    from ..plotting.mesh import save_figure
+    from ..plotting.pads import plot_pad_plan
+
+    out = Path(rep.params["plot"])
+    out.mkdir(parents=True, exist_ok=True)
+    save_figure(plot_pad_plan(res, inp.mesh, units=inp.unit if inp.unit != "m" else "mm"),
+                out / "top_axes.png")
+    return [str(out / "top_axes.png")]
+
+
+# ----------------------------------------------------------------------------- paper
+
+
+def _restrictions(p: dict, scale: float):
+    """``--min-sep``/``--max-sep`` as a range (m) and ``--region`` boxes (m)."""
+    rng = None
+    if p["min_sep"] is not None or p["max_sep"] is not None:
+        rng = ((p["min_sep"] or 0.0) * scale,
+               (p["max_sep"] if p["max_sep"] is not None else np.inf) * scale)
+    boxes = [tuple(v * scale for v in parse_numbers(r, 4, f"--region {r!r}", "X0,Y0,X1,Y1"))
+             for r in p["region"]]
+    return rng, boxes
+
+
+def _paper(part, p: dict, progress) -> Report:
+    """The paper's planner over node pairs (SPEC §4), every pair within ε."""
+    from ..limits import check_model_size
+    from ..planning.plan import plan_grasps
+
+    check_eps(p["eps"])
+    check_jaw_width(p["jaw_width"])
+    inp = read_inputs(part, p["units"])
+    mode = "expanding" if p["expanding"] else "contracting"
+    restricted = bool(p["region"]) or p["min_sep"] is not None or p["max_sep"] is not None
+    check_model_size(inp.mesh, "paper", mode=mode, plan=True, restricted=restricted)
+    rng, boxes = _restrictions(p, inp.scale)
+    res = plan_grasps(inp.mesh, eps=p["eps"], mode=mode, jaw_width=p["jaw_width"] * inp.scale,
+                      separation_range=rng, regions=boxes or None, top=p["top"],
+                      progress=progress, allow_pulling=p["allow_pulling"])
+    data = {**res.to_dict(), "provenance": provenance(inp.sources)}
+    return Report("plan", data, paper_table(res, p["top"], inp.unit), inp.warnings, p,
+                  (res, inp), _paper_writer)
+
+
+def _paper_writer(rep: Report, report: bool) -> list[str]:
+    write_report(rep, report)
+    res, inp = rep.result
+    if not rep.params["plot"]:
+        return []
+    from ..plotting.grasp import save_plan_plots
+
+    return [str(w) for w in save_plan_plots(res, rep.params["plot"],
+                                            units=inp.unit if inp.unit != "m" else "mm")]
+
+
+def paper_table(res, top: int, unit: str) -> list[str]:
+    """The ranking as a table: jaw nodes and positions, how each row was settled, the
+    pairs whose jaws would pull, and which rows are the exact ``top`` list."""
+    from ..units import length_scale
+
+    s = 1.0 / length_scale(unit)
+    c = res.settled_counts()
+    lines = [f"{len(res.pairs)} jaw pairs, every quality within ε = {res.epsilon:.3g} J of its "
+             f"optimum ({c['zero']} never held, {c['bounds']} by bounds, {c['exact']} exact; "
+             f"{res.n_sigma} shared σ values)"]
+    in_top = {tuple(int(v) for v in r.jaws): n + 1 for n, r in enumerate(res.refined)}
+    keys = [tuple(int(v) for v in p) for p in res.pairs]
+    shown = set(range(min(max(top, 5), len(res.pairs))))
+    shown |= {i for i, key in enumerate(keys) if key in in_top}     # top rows further down
+    lines.append(f"{'rank':>4} {'a':>6} {'b':>6} {f'jaw a ({unit})':>18} {'jaw b':>18} "
+                 f"{f'sigma* ({unit})':>12} {'Q (J)':>11} {'settled':>7} {'top':>4}  pulls")
+    prev = -1
+    for i in sorted(shown):
+        if i != prev + 1:
+            lines.append(f"{'...':>4}")
+        prev = i
+        a, b = keys[i]
+        (ax, ay), (bx, by) = res.jaw_xy[i] * s
+        ss = "-" if np.isnan(res.sigma_star[i]) else f"{res.sigma_star[i] * s:.5g}"
+        t = in_top.get((a, b))
+        lines.append(f"{i + 1:>4} {a:>6} {b:>6} {ax:>8.4g},{ay:<9.4g} {bx:>8.4g},{by:<9.4g} "
+                     f"{ss:>12} {res.quality[i]:>11.5g} {res.settled[i]:>7} "
+                     f"{'#' + str(t) if t else '':>4}  {'PULLS' if res.pulls[i] else ''}")
+    if any(res.pulls[i] for i in shown):
+        lines.append("PULLS: the jaw line leaves the part at a jaw (the jaw would have to pull)"
+                     + ("." if res.allow_pulling else "; kept out of the top list "
+                                                      "(--allow-pulling to keep them)."))
+    return lines
