@@ -19,7 +19,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from deformclosure.planning.batch import _mp_context, load_jobs, read_results, run_batch
+from deformclosure.batch import load_jobs, read_results, run_batch
+from deformclosure.batch.worker import mp_context
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -51,7 +52,7 @@ def main() -> None:
         print(f"{len(jobs)} jobs ({sum(j.command == 'plan' for j in jobs)} plan, "
               f"{sum(j.command == 'optimize' for j in jobs)} optimize), {cores} CPU cores")
         print(f"{'workers':>7} {'wall (s)':>9} {'job time (s)':>13} {'jobs/s':>7} {'speed-up':>9}")
-        _mp_context()  # start the fork server (it imports the package once) before timing
+        mp_context()  # start the fork server (it imports the package once) before timing
         base = None
         for w in args.workers:
             best = (float("inf"), 0.0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import multiprocessing
 import os
 import shutil
 import signal
@@ -17,18 +18,16 @@ import sqlite3
 import subprocess
 import sys
 import time
-from collections import deque
 from pathlib import Path
 
-import click
 import pytest
 
 import deformclosure
-from deformclosure.cli.main import cli, main
+from deformclosure import reports
+from deformclosure.batch import (Job, format_results, job_key, load_jobs, read_results,
+                                 result_summary, run_batch)
+from deformclosure.cli.main import main
 from deformclosure.errors import BatchError
-from deformclosure.planning import batch
-from deformclosure.planning.batch import (Job, format_results, job_key, load_jobs, read_results,
-                                          result_summary, run_batch)
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 CORRUPT = Path(__file__).resolve().parent / "bad_inputs" / "part_invalid_syntax.json"
@@ -94,7 +93,10 @@ def test_key_follows_inputs_parsed_options_and_version(parts, tmp_path):
     base = Job.from_spec(rect, "optimize", ["--at", "0,10", "12,10"])
     same = [Job.from_spec(rect, "optimize", ["--method", "exact", "--at", "0,10", "12,10"]),
             Job.from_spec(rect, "optimize", "--at 0,10 12,10 --method=exact"),
-            Job.from_spec(rect, "optimize", ["--at", "0,10", "12,10", "--plot", "out"])]
+            Job.from_spec(rect, "optimize", ["--at", "0,10", "12,10", "--plot", "out"]),
+            # display options every command takes change nothing
+            Job.from_spec(rect, "optimize", ["-q", "--at", "0,10", "12,10", "--verbose"]),
+            Job.from_spec(rect, "optimize", ["--at", "0,10", "12,10", "--quiet"])]
     assert {j.key for j in same} == {base.key}
     copy = tmp_path / "renamed.json"
     shutil.copy(rect, copy)
@@ -195,19 +197,14 @@ def test_failed_jobs_are_recorded_and_the_batch_goes_on(parts, capsys):
 
 
 def test_any_exception_is_recorded_with_its_type(parts, monkeypatch):
-    @click.command()
-    @click.argument("part")
-    @click.option("-o", "--output")
-    def boom(part, output):
-        if "plate" in part:
+    def boom(command, part, params=None, **kwargs):
+        if "plate" in part.name:
             raise ZeroDivisionError("no grip\non this part")
-        with open(output, "w") as fh:
-            json.dump({"quality": 1.5, "sigma_star": None}, fh)
-        return 0
+        return reports.Report(command, {"quality": 1.5, "sigma_star": None}, params=params)
 
-    monkeypatch.setitem(cli.commands, "boom", boom)
+    monkeypatch.setattr(reports, "run", boom)     # the inline worker runs in this process
     db = parts.parent / "r.sqlite"
-    jobs = [Job.from_spec(parts / n, "boom") for n in ("plate_with_hole.json", "rectangle.json")]
+    jobs = [Job.from_spec(parts / n, "mesh") for n in ("plate_with_hole.json", "rectangle.json")]
     s = run_batch(jobs, db, scheduler="inline", progress=False)
     assert (s.n_ok, s.n_failed, s.exit_code) == (1, 1, 1)
     assert s.failures[0]["error"] == "ZeroDivisionError: no grip on this part"
@@ -234,29 +231,31 @@ def test_rerun_skips_finished_jobs_and_retry_failed_reruns_failed(parts):
     assert _rows(db) == [_untimed(r) for r in before]
 
 
-def _crash_or_run(payload):
-    """Worker function of the crash test: the process dies on the part named crash.json."""
-    if payload["part_name"] == "crash.json":
-        os._exit(3)
-    return batch.run_job(payload)
-
-
-def test_a_job_that_kills_its_worker_fails_alone(parts):
+def test_a_job_that_kills_its_worker_fails_alone(parts, monkeypatch):
+    """A worker process that dies takes the jobs in flight down; each runs again alone and
+    only the culprit is recorded as failed. The culprit: a report function that ends its
+    process on crash.json, patched here and inherited by workers forked from this process
+    (``mp_context``)."""
     shutil.copy(parts / "rectangle.json", parts / "crash.json")
     (parts / "crash.json").write_text((parts / "crash.json").read_text() + " ")
-    jobs = load_jobs(parts, command="mesh")
-    ex = batch._Processes(2)
-    ex.fn = _crash_or_run
-    done = {}
-    try:
-        batch._drive(ex, deque(jobs), lambda job, out: done.setdefault(job.part, out),
-                     deformclosure.__version__)
-    finally:
-        ex.close()
-    status = {Path(k).name: v["status"] for k, v in done.items()}
-    assert status == {"corrupt.json": "failed", "crash.json": "failed", "l_shape.json": "ok",
-                      "plate_with_hole.json": "ok", "rectangle.json": "ok"}
-    assert "worker process died" in done[str(parts / "crash.json")]["error"]
+    real = reports.run
+
+    def crash_or_run(command, part, params=None, **kwargs):
+        if Path(part.name).name == "crash.json":
+            os._exit(3)
+        return real(command, part, params, **kwargs)
+
+    monkeypatch.setattr(reports, "run", crash_or_run)
+    db = parts.parent / "r.sqlite"
+    s = run_batch(load_jobs(parts, command="mesh"), db, workers=2, progress=False,
+                  mp_context=multiprocessing.get_context("fork"))
+    assert (s.n_run, s.n_ok, s.n_failed) == (5, 3, 2)
+    rows = {Path(r["part"]).name: r for r in read_results(db)}
+    assert {k: r["status"] for k, r in rows.items()} == {
+        "corrupt.json": "failed", "crash.json": "failed", "l_shape.json": "ok",
+        "plate_with_hole.json": "ok", "rectangle.json": "ok"}
+    assert "worker process died" in rows["crash.json"]["error"]
+    assert "not valid JSON" in rows["corrupt.json"]["error"]
 
 
 # ----------------------------------------------------------------------------- dask, SIGKILL
@@ -279,6 +278,7 @@ def _optimize_jobs(tmp_path: Path, n: int) -> Path:
     return _write_list(tmp_path / "jobs.json", entries)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_rows_as_the_local_pool(tmp_path):
     distributed = pytest.importorskip("distributed")
     jobs = load_jobs(_optimize_jobs(tmp_path, 4))
@@ -315,6 +315,7 @@ def _group_alive(pgid: int) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_sigkill_mid_batch_then_resume_equals_an_uninterrupted_run(tmp_path):
     jobs_file = _optimize_jobs(tmp_path, 8)
     n_jobs = len(load_jobs(jobs_file))

@@ -2,11 +2,11 @@
 
 Job lists with NUL bytes or huge fields, dead or fake Dask schedulers, results files that
 are someone else's database, made for another job list, corrupt or read-only, stored rows
-that are not what we wrote, Ctrl-C, stale temporary folders, paths that leave the job
-list's folder, and the CSV export's units, times and coordinates.
+that are not what we wrote, Ctrl-C, files that change under a running batch, paths that
+leave the job list's folder, and the CSV export's units, times and coordinates.
 
-Most tests run jobs with the ``inline`` scheduler and a tiny stand-in command (a few
-milliseconds a job); only Ctrl-C needs real worker processes.
+Most tests run jobs with the ``inline`` scheduler and a tiny stand-in for the report
+function (a few milliseconds a job); only Ctrl-C needs real worker processes.
 """
 
 from __future__ import annotations
@@ -22,21 +22,22 @@ import socket
 import sqlite3
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
-import click
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from deformclosure.cli.main import cli, main
+from deformclosure import batch, reports
+from deformclosure.batch import (Job, cluster, format_results, load_jobs, read_results,
+                                 run_batch, store)
+from deformclosure.cli.main import main
 from deformclosure.errors import BatchError
-from deformclosure.planning import batch
-from deformclosure.planning.batch import (Job, format_results, load_jobs, read_results,
-                                          run_batch)
+from deformclosure.jsonfile import Source
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
@@ -56,27 +57,26 @@ def parts(tmp_path) -> Path:
 
 @pytest.fixture()
 def note(monkeypatch, tmp_path):
-    """A stand-in job command ``note``: writes a small report (``--size`` pads it) and
-    logs each run in ``runs.log``; returns the log's path."""
+    """A stand-in for the report function, as the inline worker calls it: logs each run
+    in ``runs.log`` (the part's name, the type of the part and of ``--fingers``) and
+    returns a small report (padded with ``--max-area`` characters); returns the log's
+    path."""
     log = tmp_path / "runs.log"
 
-    @click.command()
-    @click.argument("part")
-    @click.option("-o", "--output")
-    @click.option("--size", type=int, default=0)
-    def note_cmd(part, output, size):
+    def note_run(command, part, params=None, **kwargs):
+        fingers = (params or {}).get("fingers")
         with open(log, "a") as fh:
-            fh.write(f"{Path(part).name} {Path(part).parent.parent}\n")
-        with open(output, "w") as fh:
-            json.dump({"quality": 1.5e-4, "sigma_star": 0.008, "pad": "x" * size}, fh)
-        return 0
+            fh.write(f"{Path(part.name).name} {type(part).__name__} {type(fingers).__name__}\n")
+        size = int((params or {}).get("max_area") or 0)
+        return reports.Report(command, {"quality": 1.5e-4, "sigma_star": 0.008,
+                                        "pad": "x" * size}, params=params)
 
-    monkeypatch.setitem(cli.commands, "note", note_cmd)
+    monkeypatch.setattr(reports, "run", note_run)
     return log
 
 
 def _jobs(parts: Path, *names: str, options=()) -> list[Job]:
-    return [Job.from_spec(parts / f"{n}.json", "note", list(options)) for n in names]
+    return [Job.from_spec(parts / f"{n}.json", "mesh", list(options)) for n in names]
 
 
 def _one_error_line(capsys) -> str:
@@ -255,7 +255,7 @@ def _server(reply: bytes | None):
 def test_a_scheduler_that_cannot_be_used_fails_fast_before_the_results_file(
         parts, note, monkeypatch, capsys):
     pytest.importorskip("distributed")
-    monkeypatch.setattr(batch, "CONNECT_TIMEOUT", 1.0)
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", 1.0)
     jobs = _jobs(parts, "rectangle")
     db = parts.parent / "r.sqlite"
     cases = [(f"tcp://127.0.0.1:{_closed_port()}", r"no answer within 1 s|cannot connect"),
@@ -272,7 +272,7 @@ def test_a_scheduler_that_cannot_be_used_fails_fast_before_the_results_file(
             assert str(err.value).startswith(f"--scheduler {address}: ")
             assert not db.exists()
         capsys.readouterr()
-        assert main(["batch", str(parts), "-o", str(db), "--quiet", "--command", "note",
+        assert main(["batch", str(parts), "-o", str(db), "--quiet", "--command", "mesh",
                      "--scheduler", silent]) == 2
     gc.collect()   # a half-made Dask client would print its traceback when collected
     assert "no answer within" in _one_error_line(capsys)
@@ -316,7 +316,7 @@ def test_a_file_that_is_not_ours_is_refused_and_left_unchanged(parts, note, caps
             run_batch(_jobs(parts, "rectangle"), db, scheduler="inline", progress=False)
         with pytest.raises(BatchError, match=r"not a deformclosure results file"):
             read_results(db)
-        assert main(["batch", str(parts), "-o", str(db), "--command", "note", "--quiet"]) == 2
+        assert main(["batch", str(parts), "-o", str(db), "--command", "mesh", "--quiet"]) == 2
         assert "not a deformclosure results file" in _one_error_line(capsys)
         assert main(["results", str(db)]) == 2
         _one_error_line(capsys)
@@ -363,7 +363,7 @@ def test_a_results_file_refuses_another_job_list_unless_append(parts, note, caps
     # From the command line: the same refusal, and --append in --help.
     (parts / "ring.json").write_bytes((EXAMPLES / "ring.json").read_bytes())
     capsys.readouterr()
-    assert main(["batch", str(parts), "-o", str(db), "--command", "note", "--quiet"]) == 2
+    assert main(["batch", str(parts), "-o", str(db), "--command", "mesh", "--quiet"]) == 2
     assert "--append" in _one_error_line(capsys)
     assert main(["batch", "--help"]) == 0
     assert "--append" in capsys.readouterr().out
@@ -382,7 +382,7 @@ def _garble(db: Path, offsets) -> None:
 @pytest.mark.parametrize("where", ["pages", "root"])
 def test_a_corrupt_results_file_is_one_line(parts, note, where, capsys):
     db = parts.parent / "r.sqlite"
-    jobs = _jobs(parts, "rectangle", "l_shape", options=["--size", "20000"])
+    jobs = _jobs(parts, "rectangle", "l_shape", options=["--max-area", "20000"])
     run_batch(jobs, db, scheduler="inline", progress=False)
     size = db.stat().st_size
     assert size > 8 * 4096 and not Path(f"{db}-wal").exists()
@@ -396,7 +396,7 @@ def test_a_corrupt_results_file_is_one_line(parts, note, where, capsys):
     with pytest.raises(BatchError, match=r"is corrupt"):
         read_results(db)
     capsys.readouterr()
-    assert main(["batch", str(parts), "-o", str(db), "--command", "note", "--quiet"]) == 2
+    assert main(["batch", str(parts), "-o", str(db), "--command", "mesh", "--quiet"]) == 2
     assert "is corrupt" in _one_error_line(capsys)
     assert main(["results", str(db), "--format", "csv"]) == 2
     assert "is corrupt" in _one_error_line(capsys)
@@ -419,7 +419,7 @@ def test_a_read_only_results_file_or_folder_fails_before_any_job(parts, note, wh
     with _read_only(db if what == "file" else folder):
         with pytest.raises(BatchError, match=r"results file .*(not writable|cannot write)"):
             run_batch(jobs, db, scheduler="inline", progress=False, append=True)
-        assert main(["batch", str(parts), "-o", str(db), "--command", "note", "--quiet",
+        assert main(["batch", str(parts), "-o", str(db), "--command", "mesh", "--quiet",
                      "--append"]) == 2
         _one_error_line(capsys)
     assert (note.read_text().count("\n") if note.exists() else 0) == n_runs   # no job ran
@@ -436,7 +436,7 @@ def test_the_write_check_itself_catches_what_access_does_not_see(parts, note, mo
             return real_connect(Path(db).resolve().as_uri() + "?mode=ro", uri=True)
         return real_connect(path, *args, **kwargs)
 
-    monkeypatch.setattr(batch.sqlite3, "connect", read_only_connect)
+    monkeypatch.setattr(store.sqlite3, "connect", read_only_connect)
     with pytest.raises(BatchError, match=r"results file .*: cannot write \(attempt to write a "
                                          r"readonly database\)"):
         run_batch(_jobs(parts, "rectangle", "l_shape"), db, scheduler="inline",
@@ -517,6 +517,8 @@ def _slow_jobs(d: Path, n: int) -> Path:
 
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc")
 def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
+    """Ctrl-C of a batch on worker processes: one line, exit 130, the workers gone, and
+    no folder of ours in the temporary folder (workers get bytes, not copies)."""
     jobs = _slow_jobs(tmp_path, 12)
     db = tmp_path / "r.sqlite"
     tmp = tmp_path / "tmp"
@@ -537,7 +539,6 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
             if n_done >= 1:
                 break
             time.sleep(0.05)
-        assert any(tmp.glob("deformclosure-run-*")), "no run folder while the batch runs"
         os.killpg(proc.pid, signal.SIGINT)          # Ctrl-C: the whole foreground group
         out, err = proc.communicate(timeout=60)
         deadline = time.monotonic() + 15
@@ -554,63 +555,63 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
         and "run the same command to resume" in lines[0]
     n_kept = len(read_results(db))
     assert 1 <= n_kept < 12 and f"interrupted; {n_kept} job" in lines[0]
-    assert not list(tmp.glob("deformclosure-run-*"))
+    assert not list(tmp.glob("deformclosure-*"))
 
 
 def test_ctrl_c_inline_is_reported_with_what_is_kept(parts, monkeypatch, tmp_path, capsys):
     calls = []
 
-    @click.command()
-    @click.argument("part")
-    @click.option("-o", "--output")
-    def stop(part, output):
-        calls.append(part)
+    def stop(command, part, params=None, **kwargs):
+        calls.append(part.name)
         if len(calls) == 2:
             raise KeyboardInterrupt
-        Path(output).write_text("{}")
-        return 0
+        return reports.Report(command, {}, params=params)
 
-    monkeypatch.setitem(cli.commands, "stop", stop)
-    monkeypatch.setattr(batch.tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(reports, "run", stop)
     db = tmp_path / "r.sqlite"
-    assert main(["batch", str(parts), "-o", str(db), "--command", "stop", "--quiet",
+    assert main(["batch", str(parts), "-o", str(db), "--command", "mesh", "--quiet",
                  "--scheduler", "inline"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"interrupted; 1 job finished is kept in {db}; run the same command to resume"]
-    assert not list(tmp_path.glob("deformclosure-run-*"))
+    assert len(read_results(db)) == 1
 
 
-def test_stale_run_folders_are_removed_only_when_ours_and_dead(parts, note, monkeypatch, tmp_path):
+def test_workers_get_the_bytes_of_the_key_named_as_the_user_named_them(parts, note,
+                                                                       monkeypatch, tmp_path):
+    """A worker receives the part and every input file as a Source (name and bytes): no
+    temporary copies, the user's names in messages; a file that changes after the jobs
+    were loaded fails its job, it is not run on other bytes than its key's."""
     base = tmp_path / "systmp"
     base.mkdir()
-    monkeypatch.setattr(batch.tempfile, "tempdir", str(base))
-    dead = subprocess.Popen([sys.executable, "-c", "pass"])
-    dead.wait()
+    monkeypatch.setattr(tempfile, "tempdir", str(base))
+    fingers = parts / "fingers.json"
+    shutil.copy(EXAMPLES / "fingers" / "rectangle.json", fingers)
+    jobs = [Job.from_spec(parts / "rectangle.json", "check", ["--fingers", "fingers.json"],
+                          base_dir=parts),
+            *_jobs(parts, "l_shape")]
+    (_, path, digest), = jobs[0].inputs
+    assert path == str(fingers) and len(digest) == 64
+    payload = batch.worker.payload(jobs[0], "9.9")
+    assert payload["part"] == Source(jobs[0].part, (parts / "rectangle.json").read_bytes())
+    assert payload["params"]["fingers"] == Source(str(fingers), fingers.read_bytes())
+    (parts / "l_shape.json").write_text((parts / "l_shape.json").read_text() + " ")
+    s = run_batch(jobs, tmp_path / "r.sqlite", scheduler="inline", progress=False)
+    assert note.read_text().splitlines() == ["rectangle.json Source Source"]
+    assert s.failures[0]["error"] == (f"{jobs[1].part}: the file changed after the batch "
+                                      "started; run the batch again")
+    assert not list(base.iterdir())
+    # The worker checks the version it runs against the batch's.
+    out = batch.run_job(payload)
+    assert out["status"] == "failed" and "install the same version on every worker" in out["error"]
 
-    def run_folder(name: str, marker: dict | None) -> Path:
-        d = base / name
-        (d / "job-x").mkdir(parents=True)
-        (d / "job-x" / "part.json").write_text("{}")
-        if marker is not None:
-            (d / ".deformclosure-run").write_text(json.dumps(marker))
-        return d
 
-    host = socket.gethostname()
-    stale = run_folder(f"deformclosure-run-{dead.pid}-0123abcd", {"pid": dead.pid, "host": host})
-    keep = [run_folder(f"deformclosure-run-{os.getpid()}-0123abcd", {"pid": os.getpid(), "host": host}),
-            run_folder(f"deformclosure-run-{dead.pid}-4567abcd", None),               # no marker
-            run_folder(f"deformclosure-run-{dead.pid}-89abcdef", {"pid": dead.pid, "host": "elsewhere"}),
-            run_folder(f"deformclosure-run-{dead.pid}-x", {"pid": dead.pid, "host": host}),  # name
-            run_folder(f"deformclosure-job-{dead.pid}-0123abcd", {"pid": dead.pid, "host": host})]
-    run_batch(_jobs(parts, "rectangle", "l_shape"), tmp_path / "r.sqlite", scheduler="inline",
-              progress=False)
-    assert not stale.exists()
-    assert all(d.is_dir() for d in keep)
-    # The jobs ran in private folders inside one run folder of this process, removed after.
-    runs = [line.split()[1] for line in note.read_text().splitlines()]
-    assert len(runs) == 2
-    assert all(Path(r).parent.name.startswith(f"deformclosure-run-{os.getpid()}-") for r in runs)
-    assert sorted(p.name for p in base.iterdir()) == sorted(d.name for d in keep)
+def test_without_dask_a_scheduler_address_is_one_line_saying_what_to_install(parts, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)       # as if not installed
+    with pytest.raises(BatchError, match=r'^--scheduler tcp://h:8786: Dask is not installed; '
+                                         r'pip install "deformclosure\[cluster\]"'):
+        run_batch(_jobs(parts, "rectangle"), parts.parent / "r.sqlite",
+                  scheduler="tcp://h:8786", progress=False)
+    assert not (parts.parent / "r.sqlite").exists()
 
 
 # ----------------------------------------------------------------------------- 10. paths

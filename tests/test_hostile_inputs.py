@@ -111,7 +111,7 @@ def _mutations():
 def test_readers_raise_only_their_own_errors(data):
     """Part, mesh, finger and job-list readers on arbitrary JSON: a value or a
     DeformClosureError, nothing else."""
-    from deformclosure.planning.batch import _json_specs
+    from deformclosure.batch.lists import _json_specs
 
     for reader in (Part.from_dict, mesh_from_dict, fingers_from_dict,
                    lambda d: _json_specs(Path("jobs.json"), json.dumps(d))):

@@ -178,7 +178,7 @@ def test_quiet_and_verbose_together_is_an_error(capsys):
 def test_batch_jobs_on_imported_meshes_take_the_material(rect_mesh, tmp_path):
     """A job list names a .obj mesh and a material file: the file is an input of the job
     (hashed into its key, like --fingers); inline JSON is part of the options."""
-    from deformclosure.planning.batch import load_jobs, read_results, run_batch
+    from deformclosure.batch import load_jobs, read_results, run_batch
 
     write_mesh(rect_mesh, tmp_path / "m.obj")
     (tmp_path / "rubber.json").write_text(json.dumps(RUBBER_MM))
@@ -203,7 +203,7 @@ def test_batch_jobs_on_imported_meshes_take_the_material(rect_mesh, tmp_path):
 
 
 def test_results_to_stdout_with_dash(tmp_path, capsys):
-    from deformclosure.planning.batch import Job, run_batch
+    from deformclosure.batch import Job, run_batch
 
     run_batch([Job.from_spec(EXAMPLES / "rectangle.json", "mesh")], tmp_path / "r.sqlite",
               scheduler="inline", progress=False)
