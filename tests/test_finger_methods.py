@@ -14,7 +14,7 @@ import shapely
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from deformclosure.dspace import (DiscFinger, HalfPlaneFinger, PointFinger, as_fingers,
+from deformclosure.dspace import (DiscFinger, HalfPlaneFinger, PointFinger, PolygonFinger, as_fingers,
                                   fingers_from_dict, load_fingers)
 from deformclosure.errors import FingerError
 from deformclosure.jsonfile import Source
@@ -152,3 +152,16 @@ def test_segment_hits_agree_with_shapely(f, a, b, tol):
     out = f.segment_hits(a[None], b[None], tol)
     assert out.shape == (1,)
     assert bool(out[0]) == hit
+
+
+@pytest.mark.parametrize("finger, field", [
+    (DiscFinger((0.0, 0.0), -1.0), "radius"),
+    (DiscFinger((0.0, float("nan")), 1.0), "center"),
+    (HalfPlaneFinger((0.0, 0.0), (0.0, 2.0)), "normal"),
+    (PolygonFinger(((0.0, 0.0), (1.0, 0.0), (2.0, 0.0))), "corners"),
+])
+def test_fingers_built_in_code_are_checked_like_the_file_reader(finger, field):
+    """A finger made in Python with a negative radius, a NaN, a non-unit normal or a
+    flat polygon is refused by every entry point (one line naming the field), never used."""
+    with pytest.raises(FingerError, match=rf"fingers\[0\]\.{field}: "):
+        as_fingers([finger])

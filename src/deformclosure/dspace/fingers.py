@@ -43,6 +43,7 @@ from typing import Annotated, Any, ClassVar, Literal, Sequence, Union
 import numpy as np
 
 from ..errors import FingerError
+from ..geometry import signed_area
 from ..jsonfile import InputFile, as_source, read_json
 from ..units import LENGTH_UNITS
 
@@ -158,6 +159,15 @@ class Finger(ABC):
     def has_interior(self) -> bool:
         """Whether the body has a non-empty interior (all fingers but the point)."""
         return True
+
+    def check(self, where: str) -> None:
+        """Refuse a finger built in code with non-finite numbers (:class:`FingerError`
+        naming ``where``); kinds add their own conditions. The file reader checks the
+        same before it builds a finger."""
+        for name, value in vars(self).items():
+            arr = np.asarray(value, dtype=float)
+            if not np.all(np.isfinite(arr)):
+                raise FingerError(f"{where}.{name}: must be finite, got {value!r}")
 
     @abstractmethod
     def signed_distance(self, points: Any) -> np.ndarray:
@@ -319,6 +329,11 @@ class DiscFinger(Finger):
     def radius_of_curvature(self) -> float:  # type: ignore[override]
         return float(self.radius)
 
+    def check(self, where: str) -> None:
+        super().check(where)
+        if not self.radius > 0:
+            raise FingerError(f"{where}.radius: must be > 0 (m), got {self.radius!r}")
+
     @property
     def vertices(self) -> np.ndarray:
         return np.zeros((0, 2))
@@ -402,6 +417,12 @@ class PolygonFinger(Finger):
 
     corners: tuple[tuple[float, float], ...]
     type: ClassVar[str] = "polygon"
+
+    def check(self, where: str) -> None:
+        super().check(where)
+        v = np.asarray(self.corners, dtype=float)
+        if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3 or abs(signed_area(v)) <= 0:
+            raise FingerError(f"{where}.corners: give at least 3 corners (m) enclosing an area")
 
     @property
     def vertices(self) -> np.ndarray:
@@ -495,6 +516,12 @@ class HalfPlaneFinger(Finger):
     normal: tuple[float, float]
     type: ClassVar[str] = "halfplane"
 
+    def check(self, where: str) -> None:
+        super().check(where)
+        if abs(float(np.hypot(*self.normal)) - 1.0) > 1e-9:
+            raise FingerError(f"{where}.normal: must be a unit vector, got {self.normal!r}; "
+                              "divide it by its length")
+
     @property
     def vertices(self) -> np.ndarray:
         return np.zeros((0, 2))
@@ -579,6 +606,7 @@ def as_fingers(fingers: Any, name: str = "fingers") -> tuple[Finger, ...]:
             raise FingerError(f"{name}[{i}]: expected a Finger (PointFinger, DiscFinger, PolygonFinger or "
                               f"HalfPlaneFinger), got {type(f).__name__}; build fingers in code or read them "
                               "with load_fingers / fingers_from_dict")
+        f.check(f"{name}[{i}]")
     return out
 
 
