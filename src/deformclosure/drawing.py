@@ -14,11 +14,16 @@ Units: a DXF file's ``$INSUNITS`` header, an SVG file's physical ``width``/``hei
 A drawing holds no material: it comes from the caller, or from a small JSON file beside
 the drawing, ``<name>.material.json`` (a material object, optionally with ``units`` and
 a ``mesh`` block of part-file mesh options).
+
+Every reader takes a path or a :class:`~deformclosure.jsonfile.Source` (a file's name and
+bytes, read once); the file beside the drawing is looked up only for a path.
 """
 
 from __future__ import annotations
 
+import io
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
@@ -26,10 +31,11 @@ from typing import Any, Iterable
 import numpy as np
 
 from .errors import PartError
+from .jsonfile import InputFile, Source, as_source
 from .units import LENGTH_UNITS
 
 __all__ = ["DRAWING_SUFFIXES", "Drawing", "read_drawing", "part_from_drawing",
-           "is_drawing_file"]
+           "is_drawing_file", "material_file_beside"]
 
 #: File suffixes read as drawings.
 DRAWING_SUFFIXES = (".dxf", ".svg")
@@ -77,19 +83,23 @@ class _Piece:
     name: str                   # "LINE #2F" / "path 'slot'"
 
 
-def is_drawing_file(path: str | Path) -> bool:
-    """Whether ``path`` is read as a drawing (by its suffix)."""
-    return Path(path).suffix.lower() in DRAWING_SUFFIXES
+def is_drawing_file(path: InputFile) -> bool:
+    """Whether ``path`` (a path or a :class:`~deformclosure.jsonfile.Source`) is read as a
+    drawing (by its suffix)."""
+    if isinstance(path, Source):
+        return path.suffix in DRAWING_SUFFIXES
+    return isinstance(path, (str, os.PathLike)) and Path(path).suffix.lower() in DRAWING_SUFFIXES
 
 
-def read_drawing(path: str | Path, units: str | None = None, layer: str | None = None,
+def read_drawing(path: InputFile, units: str | None = None, layer: str | None = None,
                  tolerance: float | None = None, default_units: str | None = None) -> Drawing:
     """Closed loops of a DXF or SVG drawing.
 
     Parameters
     ----------
-    path : path-like
-        ``.dxf`` or ``.svg`` file.
+    path : path-like or Source
+        ``.dxf`` or ``.svg`` file, or its name and bytes
+        (:class:`~deformclosure.jsonfile.Source`); messages name it.
     units : str, optional
         Unit of the drawing's coordinates, overriding its header.
     layer : str, optional
@@ -105,43 +115,87 @@ def read_drawing(path: str | Path, units: str | None = None, layer: str | None =
     PartError
         One line naming the entity or element and what is wrong.
     """
-    from .jsonfile import check_input_file
-
-    path = Path(path)
-    check_input_file(path, PartError, "drawing")
-    for given in (units, default_units):
-        if given is not None and given not in LENGTH_UNITS:
-            raise PartError(f"--units = {given!r}: unknown length unit; use one of "
-                            f"{', '.join(LENGTH_UNITS)}")
-    if tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0):
-        raise PartError(f"--tolerance = {tolerance!r}: must be a finite length > 0 in the "
-                        "drawing's units")
-    suffix = path.suffix.lower()
-    if suffix == ".dxf":
-        pieces, unit, scale = _dxf_pieces(path, units, layer, tolerance, default_units)
-    elif suffix == ".svg":
-        pieces, unit, scale = _svg_pieces(path, units, layer, tolerance)
+    src = _source(path)
+    _check_options(units, default_units, tolerance)
+    if src.suffix == ".dxf":
+        pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
+    elif src.suffix == ".svg":
+        pieces, unit, scale = _svg_pieces(src, units, layer, tolerance)
     else:
-        raise PartError(f"{path}: not a drawing; give a .dxf or .svg file")
+        raise PartError(f"{src.name}: not a drawing; give a .dxf or .svg file")
     if not pieces:
         where = f" on layer {layer!r}" if layer is not None else ""
-        raise PartError(f"{path}: no lines, arcs, polylines, circles, ellipses or splines"
+        raise PartError(f"{src.name}: no lines, arcs, polylines, circles, ellipses or splines"
                         f"{where}; draw the part's outline")
-    loops = _chain(pieces, path)
-    loops = [(pts * scale, name) for pts, name in loops]
-    return _assemble(loops, unit, path)
+    loops = [(pts * scale, label) for pts, label in _chain(pieces, src.name)]
+    return _assemble(loops, unit, src.name)
+
+
+def _source(path: InputFile) -> Source:
+    """The drawing as a Source (read once from a path)."""
+    if not isinstance(path, (str, os.PathLike, Source)):
+        raise PartError(f"drawing = {path!r}: give the path of a .dxf or .svg file")
+    return as_source(path, PartError, "drawing")
+
+
+def _check_options(units, default_units, tolerance) -> None:
+    for given in (units, default_units):
+        if given is not None and not (isinstance(given, str) and given in LENGTH_UNITS):
+            raise PartError(f"--units = {given!r}: unknown length unit; use one of "
+                            f"{', '.join(LENGTH_UNITS)}")
+    if tolerance is not None and not (isinstance(tolerance, (int, float, np.number))
+                                      and not isinstance(tolerance, bool)
+                                      and math.isfinite(tolerance) and tolerance > 0):
+        raise PartError(f"--tolerance = {tolerance!r}: must be a finite length > 0 in the "
+                        "drawing's units")
+
+
+def _detail(err: BaseException) -> str:
+    """A reader's error message on one line, at most 200 characters."""
+    return " ".join(str(err).split())[:200]
+
+
+def _too_many_vertices(name: str) -> PartError:
+    return PartError(f"{name}: flattening gives more than {MAX_VERTICES} vertices; "
+                     "give a larger --tolerance")
 
 
 # --------------------------------------------------------------------------- DXF
-def _dxf_pieces(path: Path, units: str | None, layer: str | None, tolerance: float | None,
+_BINARY_DXF = b"AutoCAD Binary DXF\r\n\x1a\x00"
+
+
+def _dxf_document(src: Source):
+    """The DXF document of ``src``'s bytes, decoded as :func:`ezdxf.readfile` decodes a file:
+    binary DXF as such; ASCII DXF in the encoding its header states (UTF-8 from R2007 on),
+    with universal newlines, undecodable bytes kept (``surrogateescape``)."""
+    import ezdxf
+    from ezdxf.document import Drawing as DXFDocument
+    from ezdxf.filemanagement import dxf_stream_info
+    from ezdxf.lldxf.tagger import binary_tags_loader
+    from ezdxf.lldxf.validator import is_dxf_stream
+
+    data = src.data
+    if data.startswith(_BINARY_DXF):
+        return DXFDocument.load(binary_tags_loader(data, errors="surrogateescape"))
+
+    def text(encoding: str, errors: str) -> io.TextIOWrapper:
+        return io.TextIOWrapper(io.BytesIO(data), encoding=encoding, errors=errors)
+
+    if not is_dxf_stream(text("utf-8", "ignore")):
+        raise OSError("not a DXF file")
+    info = dxf_stream_info(text("utf-8", "ignore"))
+    return ezdxf.read(text(info.encoding, "surrogateescape"))
+
+
+def _dxf_pieces(src: Source, units: str | None, layer: str | None, tolerance: float | None,
                 default_units: str | None) -> tuple[list[_Piece], str, float]:
     import ezdxf
 
+    path = src.name
     try:
-        doc = ezdxf.readfile(str(path))
-    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError) as err:
-        detail = " ".join(str(err).split())[:200]
-        raise PartError(f"{path}: not a readable DXF file ({detail})") from None
+        doc = _dxf_document(src)
+    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError, LookupError) as err:
+        raise PartError(f"{path}: not a readable DXF file ({_detail(err)})") from None
     msp = doc.modelspace()
     entities = []
     for e in msp:
@@ -179,8 +233,7 @@ def _dxf_pieces(path: Path, units: str | None, layer: str | None, tolerance: flo
             raise PartError(f"{path}: {name} is not in the XY plane; the part must be planar")
         total += len(pts)
         if total > MAX_VERTICES:
-            raise PartError(f"{path}: flattening gives more than {MAX_VERTICES} vertices; "
-                            "give a larger --tolerance")
+            raise _too_many_vertices(path)
         if len(pts) < 2 or not np.all(np.isfinite(pts)):
             raise PartError(f"{path}: {name} is degenerate (no length or non-finite "
                             "coordinates); delete it")
@@ -334,15 +387,15 @@ def _dxf_diagonal(curves) -> float:
 _SVG_PHYSICAL = {"mm": 1.0, "cm": 10.0, "in": 25.4, "pt": 25.4 / 72, "pc": 25.4 / 6}
 
 
-def _svg_pieces(path: Path, units: str | None, layer: str | None,
+def _svg_pieces(src: Source, units: str | None, layer: str | None,
                 tolerance: float | None) -> tuple[list[_Piece], str, float]:
     import svgelements as se
 
+    path = src.name
     try:
-        svg = se.SVG.parse(str(path), reify=True, ppi=96.0)
+        svg = se.SVG.parse(io.BytesIO(src.data), reify=True, ppi=96.0)
     except Exception as err:  # noqa: BLE001 - the XML parser and svgelements raise many types
-        detail = " ".join(str(err).split())[:200]
-        raise PartError(f"{path}: not a readable SVG file ({detail})") from None
+        raise PartError(f"{path}: not a readable SVG file ({_detail(err)})") from None
     root = svg
     if layer is not None:
         found = svg.get_element_by_id(layer)
@@ -382,8 +435,7 @@ def _svg_pieces(path: Path, units: str | None, layer: str | None,
                 continue
             total += len(pts)
             if total > MAX_VERTICES:
-                raise PartError(f"{path}: flattening gives more than {MAX_VERTICES} vertices; "
-                                "give a larger --tolerance")
+                raise _too_many_vertices(path)
             if not np.all(np.isfinite(pts)):
                 raise PartError(f"{path}: {name} has non-finite coordinates; fix it")
             label = name if k == 0 else f"{name} (sub-path {k + 1})"
@@ -449,7 +501,7 @@ def _subdivide(seg, t0: float, t1: float, p0: complex, p1: complex, tol: float,
 
 
 # --------------------------------------------------------------------------- loops
-def _chain(pieces: list[_Piece], path: Path) -> list[tuple[np.ndarray, str]]:
+def _chain(pieces: list[_Piece], path: str) -> list[tuple[np.ndarray, str]]:
     """Closed loops: closed pieces as they are, open pieces joined end to end (end points
     within 1e-6 of the drawing's span of each other are the same point)."""
     loops = [(p.points, p.name) for p in pieces if p.closed]
@@ -510,7 +562,7 @@ def _chain(pieces: list[_Piece], path: Path) -> list[tuple[np.ndarray, str]]:
     return loops
 
 
-def _assemble(loops: list[tuple[np.ndarray, str]], unit: str, path: Path) -> Drawing:
+def _assemble(loops: list[tuple[np.ndarray, str]], unit: str, path: str) -> Drawing:
     import shapely
 
     rings = []
@@ -557,62 +609,74 @@ def _dedupe(pts: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- parts
-def part_from_drawing(path: str | Path, material=None, units: str | None = None,
+def material_file_beside(path: InputFile) -> Path | None:
+    """The material file ``<name>.material.json`` beside a drawing given by its path, if it
+    exists; for a drawing given as a :class:`~deformclosure.jsonfile.Source`, the Source's
+    ``sidecar`` (the material file's bytes read with the drawing's, or ``None``)."""
+    if isinstance(path, Source):
+        return path.sidecar
+    side = _side_path(Path(path))
+    return side if side.is_file() else None
+
+
+def _side_path(path: Path) -> Path:
+    return path.with_name(path.stem + ".material.json")
+
+
+def part_from_drawing(path: InputFile, material=None, units: str | None = None,
                       layer: str | None = None, tolerance: float | None = None,
                       mesh: dict | None = None, name: str | None = None,
-                      default_units: str | None = None):
+                      default_units: str | None = None, material_file: InputFile | None = None):
     """A :class:`~deformclosure.part.Part` from a drawing.
 
     Parameters
     ----------
-    path : path-like
-        ``.dxf`` or ``.svg``.
-    material : Material or str, optional
+    path : path-like or Source
+        ``.dxf`` or ``.svg`` file, or its name and bytes
+        (:class:`~deformclosure.jsonfile.Source`).
+    material : Material, str, path-like or Source, optional
         A material, or the text of ``--material`` (inline JSON or a JSON file; lengths in
-        the drawing's units unless it states its own). Default: from
-        ``<name>.material.json`` beside the drawing.
+        the drawing's units unless it states its own). Default: from ``material_file``.
     units, layer, tolerance, default_units
         See :func:`read_drawing`.
     mesh : dict, optional
         Part-file mesh options (``max_area`` in units², ``min_angle``, ``points``); default
-        from the material file beside the drawing, if it has a ``mesh`` block.
+        from ``material_file``, if it has a ``mesh`` block.
     name : str, optional
         Default: the file's stem.
+    material_file : path-like or Source, optional
+        The drawing's material file: a material object, optionally with ``units`` and a
+        ``mesh`` block. Default: :func:`material_file_beside` the drawing (a path only).
 
     Raises
     ------
     PartError
     """
-    from .part import Part, read_material
+    from .part import Material, Part, read_material
     from .units import length_scale
 
-    path = Path(path)
-    drawing = read_drawing(path, units, layer, tolerance, default_units)
-    if isinstance(material, str):
+    src = _source(path)
+    drawing = read_drawing(src, units, layer, tolerance, default_units)
+    if isinstance(material, (str, os.PathLike, Source)):
         material = read_material(material, drawing.units)
-    side = path.with_name(path.stem + ".material.json")
+    elif material is not None and not isinstance(material, Material):
+        raise PartError(f"material = {material!r}: give a Material, inline JSON or a "
+                        "material file")
     if material is None or mesh is None:
-        if side.exists():
-            from .jsonfile import read_json
-
-            data = read_json(side, PartError, "material file")
-            if isinstance(data, dict) and mesh is None and isinstance(data.get("mesh"), dict):
-                mesh = data["mesh"]
-            if material is None:
-                blob = {k: v for k, v in data.items() if k != "mesh"} \
-                    if isinstance(data, dict) else data
-                import json
-
-                material = read_material(json.dumps(blob), drawing.units, str(side))
+        side = material_file if material_file is not None else material_file_beside(path)
+        if side is not None:
+            material, mesh = _material_file(side, drawing.units, material, mesh)
         elif material is None:
-            raise PartError(f"{path}: a drawing has no material; give --material FILE|JSON or "
-                            f"put it in {side.name} beside the drawing")
+            hint = "" if isinstance(path, Source) else \
+                f" or put it in {_side_path(Path(path)).name} beside the drawing"
+            raise PartError(f"{src.name}: a drawing has no material; give --material "
+                            f"FILE|JSON{hint}")
     scale = length_scale(drawing.units)
     mat = material.to_dict()
     mat["thickness"] = material.thickness / scale
     if material.critical_distance is not None:
         mat["critical_distance"] = material.critical_distance / scale
-    data = {"name": name or path.stem, "units": drawing.units,
+    data = {"name": name or Path(src.name).stem, "units": drawing.units,
             "outer": drawing.outer.tolist(), "holes": [h.tolist() for h in drawing.holes],
             "material": mat}
     if mesh is not None:
@@ -621,3 +685,20 @@ def part_from_drawing(path: str | Path, material=None, units: str | None = None,
     import dataclasses
 
     return dataclasses.replace(part, material=material)
+
+
+def _material_file(side: InputFile, units: str, material, mesh):
+    """``(material, mesh)``, each kept if given, else from the material file ``side``
+    (lengths in the drawing's ``units`` unless it states its own)."""
+    import json
+
+    from .jsonfile import read_json
+    from .part import read_material
+
+    data = read_json(side if isinstance(side, Source) else Path(side), PartError, "material file")
+    if isinstance(data, dict) and mesh is None and isinstance(data.get("mesh"), dict):
+        mesh = data["mesh"]
+    if material is None:
+        blob = {k: v for k, v in data.items() if k != "mesh"} if isinstance(data, dict) else data
+        material = read_material(json.dumps(blob), units, str(side))
+    return material, mesh

@@ -30,8 +30,8 @@ import numpy as np
 
 from .errors import DeformClosureError
 
-__all__ = ["FieldState", "FIELD_FORMATS", "field_paths", "state_data", "write_fields",
-           "write_slice_fields"]
+__all__ = ["FieldState", "FIELD_FORMATS", "field_paths", "check_field_path", "state_data",
+           "write_fields", "write_slice_fields"]
 
 #: Suffixes ``--export-fields`` writes (meshio formats keeping point and cell data).
 FIELD_FORMATS = (".vtu", ".vtk")
@@ -83,6 +83,31 @@ def _tributary_lengths(mesh) -> np.ndarray:
     return out
 
 
+def _nodal(values, n: int, field: str) -> np.ndarray:
+    """``values`` as an ``(n, 2)`` float array: one vector per node."""
+    try:
+        arr = np.asarray(values, float)
+    except (TypeError, ValueError):
+        raise DeformClosureError(f"{field}: not an array of numbers") from None
+    if arr.size != 2 * n:
+        raise DeformClosureError(f"{field}: {arr.size} values for a mesh of {n} nodes; give "
+                                 f"shape ({2 * n},) or ({n}, 2)")
+    return arr.reshape(n, 2)
+
+
+def _write_mesh(path: str | Path, points: np.ndarray, cells: list, **data) -> None:
+    """``meshio.write_points_cells`` to ``path`` atomically; a failure is one line."""
+    import meshio
+
+    from .outputs import atomic_path
+
+    try:
+        with atomic_path(path) as tmp:
+            meshio.write_points_cells(tmp, points, cells, **data)
+    except OSError as err:
+        raise DeformClosureError(f"--export-fields {path}: cannot write ({err.strerror})") from None
+
+
 def state_data(mesh, state: FieldState, ell: float) -> tuple[dict, dict]:
     """Point and cell data of ``state`` on ``mesh`` (see the module docstring).
 
@@ -103,9 +128,9 @@ def state_data(mesh, state: FieldState, ell: float) -> tuple[dict, dict]:
     from .elasticity.strain import element_strains, principal_strains
 
     n = mesh.n_nodes
-    u = np.asarray(state.displacement, float).reshape(n, 2)
-    f = np.asarray(state.forces, float).reshape(n, 2)
-    ue = u if state.elastic is None else np.asarray(state.elastic, float).reshape(n, 2)
+    u = _nodal(state.displacement, n, f"{state.label}.displacement")
+    f = _nodal(state.forces, n, f"{state.label}.forces")
+    ue = u if state.elastic is None else _nodal(state.elastic, n, f"{state.label}.elastic")
     eng = element_strains(mesh, ue.ravel())                # [exx, eyy, gamma_xy]
     avg = averaged_strains(mesh, eng, ell)
     mag = np.abs(principal_strains(eng)).max(axis=1)
@@ -135,21 +160,12 @@ def write_fields(path: str | Path, mesh, states: list[FieldState], ell: float) -
     list of Path
         The files written, in the order of ``states``.
     """
-    import meshio
-
-    from .outputs import atomic_path
-
     check_field_path(path)
     paths = field_paths(path, [s.label for s in states])
     for p, state in zip(paths, states):
         point, cell = state_data(mesh, state, ell)
-        pts = point["rest_position"] + point["displacement"]
-        try:
-            with atomic_path(p) as tmp:
-                meshio.write_points_cells(tmp, pts, [("triangle", mesh.triangles)],
-                                          point_data=point, cell_data=cell)
-        except OSError as err:
-            raise DeformClosureError(f"--export-fields {p}: cannot write ({err.strerror})") from None
+        _write_mesh(p, point["rest_position"] + point["displacement"],
+                    [("triangle", mesh.triangles)], point_data=point, cell_data=cell)
     return paths
 
 
@@ -157,10 +173,6 @@ def write_slice_fields(path: str | Path, result) -> Path:
     """A D-space slice (``slice``) as an image for ParaView: the grid of positions of the
     moving node (pixel centres, m) joined into quads, with point data ``energy`` (J),
     ``d_free`` and ``d_t`` (1 inside, 0 outside) and ``obstacle_<k>`` for each finger."""
-    import meshio
-
-    from .outputs import atomic_path
-
     check_field_path(path)
     xs, ys = np.asarray(result.xs, float), np.asarray(result.ys, float)
     nx, ny = len(xs), len(ys)
@@ -174,9 +186,5 @@ def write_slice_fields(path: str | Path, result) -> Path:
             "d_t": np.asarray(result.in_dt, float).ravel()}
     for k, ob in enumerate(np.asarray(result.obstacles)):
         data[f"obstacle_{k}"] = ob.astype(float).ravel()
-    try:
-        with atomic_path(path) as tmp:
-            meshio.write_points_cells(tmp, pts, [("quad", quads)], point_data=data)
-    except OSError as err:
-        raise DeformClosureError(f"--export-fields {path}: cannot write ({err.strerror})") from None
+    _write_mesh(path, pts, [("quad", quads)], point_data=data)
     return Path(path)

@@ -14,17 +14,23 @@ package's usual one-line error (:class:`~deformclosure.errors.PartError`,
 The maxima are set for a machine with :data:`MEMORY_BUDGET` = 4 GB; the costs were
 measured with ``benchmarks/bench_limits.py``, which runs every command at (or near) its
 documented maximum and prints its peak resident memory and time.
+
+The CLI builds its ``--help`` texts from the maxima (:func:`limits_help`), so importing
+this module loads no numpy or shapely: the functions that need them import them.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from numbers import Integral
+from typing import TYPE_CHECKING, Sequence
 
-import numpy as np
-
+from .choices import MODELS, choose
 from .errors import DeformClosureError, GraspError, PartError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = [
     "MEMORY_BUDGET",
@@ -97,10 +103,10 @@ MAX_MESH_POINTS = 50_000
 # Triangles per unit, measured with Triangle (20250106) at min angles 10..34 degrees:
 # area-driven triangles per area/max_area, per boundary vertex (its graded neighbourhood),
 # per boundary element forced by a narrow feature.
-_ANGLES = np.array([0.0, 10.0, 20.0, 25.0, 30.0, 33.0, 34.0])
-_PER_AREA = np.array([1.6, 1.6, 1.6, 1.6, 1.6, 1.75, 1.9])
-_PER_VERTEX = np.array([1.9, 1.9, 3.0, 4.1, 4.9, 8.0, 9.3])
-_PER_THIN = np.array([0.26, 0.26, 0.41, 0.54, 0.7, 0.8, 0.8])
+_ANGLES = (0.0, 10.0, 20.0, 25.0, 30.0, 33.0, 34.0)
+_PER_AREA = (1.6, 1.6, 1.6, 1.6, 1.6, 1.75, 1.9)
+_PER_VERTEX = (1.9, 1.9, 3.0, 4.1, 4.9, 8.0, 9.3)
+_PER_THIN = (0.26, 0.26, 0.41, 0.54, 0.7, 0.8, 0.8)
 # At 30 degrees a vertex's neighbourhood is about 2.8 + 0.36 log2(h / lfs) triangles (h: the
 # element size of max_area, lfs: the vertex's local feature size), fitted on circles of
 # 1000 to 20 000 vertices; other angles scale it like _PER_VERTEX.
@@ -180,8 +186,24 @@ def _fmt(n: float) -> str:
     return f"{int(n):,}" if n < 1e7 else f"{n:.2g}"
 
 
+def _rate(table: Sequence[float], min_angle: float) -> float:
+    """A measured rate of :data:`_ANGLES` at ``min_angle`` (degrees, clipped to 0..34)."""
+    import numpy as np
+
+    return float(np.interp(float(min(max(min_angle, 0.0), 34.0)), _ANGLES, table))
+
+
+def _part_area(rings: Sequence[np.ndarray]) -> float:
+    """Area (m²) of the polygon with outer ring ``rings[0]`` and holes ``rings[1:]``."""
+    import shapely
+
+    return float(shapely.Polygon(rings[0], list(rings[1:])).area)
+
+
 # --------------------------------------------------------------------------- rings
 def _ring_arrays(rings: Sequence[np.ndarray]):
+    import numpy as np
+
     sizes = np.array([len(r) for r in rings], dtype=np.int64)
     P = np.concatenate([np.asarray(r, float) for r in rings])
     start = np.repeat(np.cumsum(sizes) - sizes, sizes)
@@ -203,6 +225,7 @@ def local_feature_sizes(rings: Sequence[np.ndarray]) -> np.ndarray:
     when the segment to its closest point passes through the part (a narrow slot of the
     exterior does not force small triangles). O((k + pairs) log k) for k vertices.
     """
+    import numpy as np
     import shapely
 
     P, nxt, prv, _ = _ring_arrays(rings)
@@ -214,10 +237,7 @@ def local_feature_sizes(rings: Sequence[np.ndarray]) -> np.ndarray:
     vi, ei = tree.query(shapely.box(P[:, 0] - r, P[:, 1] - r, P[:, 0] + r, P[:, 1] + r))
     keep = (ei != vi) & (ei != prv[vi])
     vi, ei = vi[keep], ei[keep]
-    a, ab = P[ei], Q[ei] - P[ei]
-    t = np.clip(((P[vi] - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-    c = a + t[:, None] * ab
-    d = np.hypot(P[vi, 0] - c[:, 0], P[vi, 1] - c[:, 1])
+    c, d = _closest_on_segments(P[vi], P[ei], Q[ei])
     lfs = r.copy()
     close = d < r[vi]
     if close.any():
@@ -230,6 +250,18 @@ def local_feature_sizes(rings: Sequence[np.ndarray]) -> np.ndarray:
     return lfs
 
 
+def _closest_on_segments(p: np.ndarray, a: np.ndarray, b: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Closest points ``c`` (k, 2) of segments ``a``–``b`` to points ``p`` and the distances
+    ``|p − c|`` (m), row by row (a degenerate segment is its end ``a``)."""
+    import numpy as np
+
+    ab = b - a
+    t = np.clip(((p - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
+    c = a + t[:, None] * ab
+    return c, np.hypot(p[:, 0] - c[:, 0], p[:, 1] - c[:, 1])
+
+
 def points_within(polygon, points: np.ndarray, tol: float) -> np.ndarray:
     """Which ``points`` (q, 2) lie in ``polygon`` or within ``tol`` of it (m).
 
@@ -238,6 +270,7 @@ def points_within(polygon, points: np.ndarray, tol: float) -> np.ndarray:
     O((q + k) log k) instead of q × k segment distances (10 000 points on a 20 000-vertex
     ring: milliseconds instead of seconds).
     """
+    import numpy as np
     import shapely
 
     pts = np.asarray(points, float).reshape(-1, 2)
@@ -308,10 +341,10 @@ def estimate_triangles(rings: Sequence[np.ndarray], max_area: float, min_angle: 
         Within a factor of about 1.5 of Triangle's count on squares, circles with up to
         20 000 vertices, notched bars, thin strips and slots (measured).
     """
-    import shapely
+    import numpy as np
 
     points = np.zeros((0, 2)) if points is None else np.asarray(points, float).reshape(-1, 2)
-    area = float(shapely.Polygon(rings[0], list(rings[1:])).area)
+    area = _part_area(rings)
     P, nxt, _, ring = _ring_arrays(rings)
     L = np.hypot(*(P[nxt] - P).T)
     lfs = np.maximum(local_feature_sizes(rings), 1e-300)
@@ -321,13 +354,12 @@ def estimate_triangles(rings: Sequence[np.ndarray], max_area: float, min_angle: 
                             L * np.log(gb / ga) / (gb - ga))
     integral = np.where(np.isfinite(integral), integral, L / np.minimum(ga, gb))
     thin = np.maximum(integral - 1.0, 0.0)
-    a = float(min(max(min_angle, 0.0), 34.0))
-    per_area = float(np.interp(a, _ANGLES, _PER_AREA))
-    per_thin = float(np.interp(a, _ANGLES, _PER_THIN))
+    per_area = _rate(_PER_AREA, min_angle)
+    per_thin = _rate(_PER_THIN, min_angle)
     # Each vertex (and inserted point) is the centre of a graded neighbourhood whose size
     # grows with the number of halvings from the element size of max_area down to its
     # local feature size.
-    grade = float(np.interp(a, _ANGLES, _PER_VERTEX)) / _VERTEX_30
+    grade = _rate(_PER_VERTEX, min_angle) / _VERTEX_30
     h = math.sqrt(4.0 * max_area / math.sqrt(3.0))
     depth = np.log2(np.maximum(h / lfs, 1.0))
     vertex = grade * float(np.sum(_VERTEX_BASE + _VERTEX_PER_HALVING * depth))
@@ -369,14 +401,12 @@ def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: flo
     ------
     PartError
     """
-    import shapely
-
     check_mesh_points(0 if points is None else len(points))
     ma = max_area / scale**2
     # The area alone (a lower bound of the count) refuses absurd requests before the
     # boundary is examined.
-    area = float(shapely.Polygon(rings[0], list(rings[1:])).area)
-    per_area = float(np.interp(min(max(min_angle, 0.0), 34.0), _ANGLES, _PER_AREA))
+    area = _part_area(rings)
+    per_area = _rate(_PER_AREA, min_angle)
     if per_area * area / max_area > MAX_TRIANGLES:
         n = per_area * area / max_area
         raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about {_fmt(n)} "
@@ -445,6 +475,7 @@ def ring_gap_pairs(rings: Sequence[np.ndarray], min_gap: float
     every vertex, the edges of *other* rings within ``min_gap`` — an R-tree query with that
     radius, O(k log k) for k vertices in all, whatever the number of holes.
     """
+    import numpy as np
     import shapely
 
     if len(rings) < 2:
@@ -456,10 +487,7 @@ def ring_gap_pairs(rings: Sequence[np.ndarray], min_gap: float
     if not other.any():
         return None
     vi, ei = vi[other], ei[other]
-    a, ab = P[ei], P[nxt[ei]] - P[ei]
-    t = np.clip(((P[vi] - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-    c = a + t[:, None] * ab
-    d = np.hypot(P[vi, 0] - c[:, 0], P[vi, 1] - c[:, 1])
+    _, d = _closest_on_segments(P[vi], P[ei], P[nxt[ei]])
     k = int(np.argmin(d))
     i, j = sorted((int(ring[vi[k]]), int(ring[ei[k]])))
     return float(d[k]), i, j
@@ -556,7 +584,7 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         out["averaging"] = AVERAGING_BYTES_PER_NONZERO * _averaging_nonzeros(n_triangles, area, ell)
     else:
-        raise ValueError(f"model = {model!r}: use 'paper' or 'pads'")
+        choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
     # one after another: the largest of these transients adds to what stays.
     transient = max(out["graph"], out["strains"], out["averaging"])
@@ -663,7 +691,7 @@ def check_model_size(mesh, model: str, *, mode: str = "contracting", plan: bool 
     GraspError
     """
     loops = list(mesh.loops)
-    levels = int(refine) if isinstance(refine, (int, np.integer)) and 1 <= refine <= 5 else 1
+    levels = int(refine) if isinstance(refine, Integral) and 1 <= refine <= 5 else 1
     f, g = 4 ** (levels - 1), 2 ** (levels - 1)
     if levels > 1 and mesh.n_triangles * f > MAX_TRIANGLES:
         raise GraspError(f"--refine {levels}: the finest mesh would have about "
@@ -716,7 +744,7 @@ def check_slice_size(resolution: int, n_fingers: int = 0, json_output: bool = Fa
     ------
     DeformClosureError
     """
-    if not (isinstance(resolution, (int, np.integer)) and 2 <= resolution <= MAX_SLICE_RESOLUTION):
+    if not (isinstance(resolution, Integral) and 2 <= resolution <= MAX_SLICE_RESOLUTION):
         raise DeformClosureError(f"{field} {resolution}: use 2..{MAX_SLICE_RESOLUTION:,} pixels "
                                  "per axis")
     px = float(resolution) ** 2

@@ -28,8 +28,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..elasticity.condense import CondensedCompliance
+from ..elasticity.critical_distance import averaging_operator
 from ..elasticity.solve import rigid_modes
-from ..elasticity.stiffness import stiffness_matrix
+from ..elasticity.stiffness import element_b_matrices, stiffness_matrix
+from ..geometry import touch_tolerance
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 from .homotopy import ContactPath, trace_contact_path
 
@@ -144,6 +146,10 @@ class GraspCurve:
 class PadContact:
     """One factorisation of a part's stiffness; grasp energies for any axis and pad.
 
+    It also keeps the mesh's strain data, built on first use: the element
+    strain-displacement matrices and the critical-distance averaging operator of each
+    ``ℓ`` — a plan evaluates the elastic limit of hundreds of axes on the same mesh.
+
     Parameters
     ----------
     mesh : Mesh
@@ -173,6 +179,35 @@ class PadContact:
         self._R, self._MR, self._H = R, MR, H
         self.diameter = mesh.diameter
         self._ring = nodes[mesh.outer_loop]
+        self._B: np.ndarray | None = None
+        self._averaging: dict[float, sp.csr_matrix] = {}
+
+    def element_strains(self, U: np.ndarray) -> np.ndarray:
+        """Engineering element strains ``[exx, eyy, gamma_xy]`` of the displacement
+        columns ``U`` (m), shape ``(2n, k)``, as an array ``(k, m, 3)``.
+
+        The same numbers as :func:`deformclosure.elasticity.strain.element_strains` on each
+        column, with the strain-displacement matrices built once per mesh.
+        """
+        mesh = self.mesh
+        if self._B is None:
+            self._B, _ = element_b_matrices(mesh.nodes, mesh.triangles)
+        tri, n = mesh.triangles, mesh.n_nodes
+
+        def strains(u: np.ndarray) -> np.ndarray:
+            ue = np.asarray(u, float).reshape(n, 2)[tri].reshape(len(tri), 6)
+            return np.einsum("mij,mj->mi", self._B, ue)
+
+        return np.stack([strains(U[:, j]) for j in range(U.shape[1])])
+
+    def averaging_operator(self, ell: float) -> sp.csr_matrix:
+        """The critical-distance averaging operator of this mesh for ``ell`` (m)
+        (:func:`deformclosure.elasticity.critical_distance.averaging_operator`), built
+        once per ``ell``."""
+        W = self._averaging.get(ell)
+        if W is None:
+            W = self._averaging[ell] = averaging_operator(self.mesh, ell)
+        return W
 
     def load_vector(self, curve: GraspCurve, lam: np.ndarray) -> np.ndarray:
         """Global load vector (N), shape (2n,), of multipliers ``lam`` on ``curve``'s contacts."""
@@ -230,13 +265,8 @@ class PadContact:
         d, slope = pad.profile(x)
         inside = np.isfinite(d)
         a, n = axis.direction, axis.normal
-        gA = s - touch.z_a + d
-        gB = touch.z_b + d - s
+        gA, gB = self._rest_gaps(s, d, touch)
         tol = 1e-10 * self.diameter
-        if touch.expanding:
-            # Only the ring ahead of each pad can be touched by it.
-            gA = np.where(gA >= -1e-9 * self.diameter, gA, np.inf)
-            gB = np.where(gB >= -1e-9 * self.diameter, gB, np.inf)
         # Contacts that could close within the squeeze; verified afterwards.
         cutoff = 2.0 * delta_max + tol
         for _ in range(6):
@@ -265,6 +295,19 @@ class PadContact:
             cutoff = 2.0 * missed
         return curve
 
+    def _rest_gaps(self, s: np.ndarray, d: np.ndarray, touch: FirstTouch
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Rest gaps (m) of ring points at axial ``s`` to pads A and B at first touch (``d``:
+        the pad surface at their cross-axis coordinates). Expanding, a pad can touch only
+        the ring ahead of it: points behind it (beyond the touching tolerance) get ``inf``."""
+        gA = s - touch.z_a + d
+        gB = touch.z_b + d - s
+        if touch.expanding:
+            behind = -touch_tolerance(self.diameter)
+            gA = np.where(gA >= behind, gA, np.inf)
+            gB = np.where(gB >= behind, gB, np.inf)
+        return gA, gB
+
     def _delassus(self, nodes: np.ndarray, normals: np.ndarray) -> np.ndarray:
         pos = self.cc.position(nodes)
         dx, dy = 2 * pos, 2 * pos + 1
@@ -286,10 +329,7 @@ class PadContact:
         # Nodes whose rest gap exceeds four times the squeeze cannot close: boundary
         # displacements stay of the order of the squeeze.
         far = 4.0 * float(path.delta[-1]) + tol
-        ga, gb = s - touch.z_a + d, touch.z_b + d - s
-        if touch.expanding:   # the ring behind a pad is not its concern
-            ga = np.where(ga >= -1e-9 * self.diameter, ga, np.inf)
-            gb = np.where(gb >= -1e-9 * self.diameter, gb, np.inf)
+        ga, gb = self._rest_gaps(s, d, touch)
         check = np.flatnonzero(inside & ((ga <= far) | (gb <= far)))
         if len(check) == 0:
             return 0.0

@@ -25,16 +25,28 @@ along an edge ``s`` is linear and ``d`` convex in the edge parameter, so the min
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import GraspError
+from ..geometry import touch_tolerance
 
 __all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "FLANK_ANGLE"]
 
 #: Steepest surface angle (rad, from the face) where pad contact is enforced.
 FLANK_ANGLE = np.radians(75.0)
+
+
+def _finite(value) -> bool:
+    """Whether ``value`` is one finite real number (not a string, an array or a bool)."""
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    try:
+        return math.isfinite(value)
+    except (TypeError, ValueError):
+        return False
 
 
 @dataclass(frozen=True)
@@ -45,10 +57,10 @@ class Pad:
     radius: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.width) and self.width >= 0):
+        if not (_finite(self.width) and self.width >= 0):
             raise GraspError(f"pad width = {self.width!r}: must be a finite length >= 0 "
                              "(0 = round fingertip)")
-        if not (np.isfinite(self.radius) and self.radius > 0):
+        if not (_finite(self.radius) and self.radius > 0):
             raise GraspError(f"pad radius = {self.radius!r}: must be a finite length > 0")
 
     @property
@@ -99,6 +111,15 @@ class GraspAxis:
     angle: float
     offset: float
     origin: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if not (_finite(self.angle) and _finite(self.offset)):
+            raise GraspError(f"axis = ({self.angle!r} rad, {self.offset!r} m): the angle and "
+                             "offset must be finite numbers")
+        o = self.origin
+        if not (isinstance(o, (tuple, list, np.ndarray)) and len(o) == 2
+                and _finite(o[0]) and _finite(o[1])):
+            raise GraspError(f"axis origin = {o!r}: give a point (x, y) in m")
 
     @classmethod
     def through(cls, p: np.ndarray, q: np.ndarray, origin=(0.0, 0.0)) -> "GraspAxis":
@@ -220,8 +241,8 @@ def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad,
     ring = np.asarray(ring, float)
     s, x = axis.coordinates(ring)
     s1, x1 = np.roll(s, -1), np.roll(x, -1)
-    scale = float(np.ptp(ring, axis=0).max())
-    tol = 1e-9 * scale
+    # SPEC §3's touching tolerance, on the ring's extent (no hull per axis).
+    tol = touch_tolerance(float(np.ptp(ring, axis=0).max()))
     out = []
     for sign in (1.0, -1.0):   # pad A minimises s + d(x); pad B maximises s − d(x)
         f, ss, xs = _edge_minima(sign * s, sign * s1, x, x1, pad, tol)

@@ -110,72 +110,93 @@ def _derivative_qp(Wj, bj, ej, zmask):  # pragma: no cover - compiled
         bscale = max(bscale, abs(bj[i]))
     tol = 1e-12
     for _ in range(20 * n + 50):
-        nf = 0
-        for i in range(n):
-            if not fixed[i]:
-                nf += 1
+        F = np.flatnonzero(~fixed)
+        nf = F.shape[0]
         if nf == 0:
             # Nothing free: release the bound whose multiplier at μ = 0 is most negative.
-            worst, arg = 0.0, -1
-            for i in range(n):
-                if -bj[i] < worst:
-                    worst, arg = -bj[i], i
+            arg = _most_negative(-bj, 0.0)
             if arg < 0:
                 return x, mu
             fixed[arg] = False
             continue
-        F = np.empty(nf, np.int64)
-        k = 0
-        for i in range(n):
-            if not fixed[i]:
-                F[k] = i
-                k += 1
-        K = np.zeros((nf + 1, nf + 1))
-        rhs = np.zeros(nf + 1)
-        for a in range(nf):
-            for c in range(nf):
-                K[a, c] = Wj[F[a], F[c]]
-            K[a, nf] = ej[F[a]]
-            K[nf, a] = ej[F[a]]
-            rhs[a] = bj[F[a]]
-        sol = np.linalg.solve(K, rhs)
+        sol = _equality_qp(Wj, bj, ej, F)
         pmax, xmax = 0.0, 0.0
         for a in range(nf):
             pmax = max(pmax, abs(sol[a] - x[F[a]]))
             xmax = max(xmax, abs(sol[a]))
         if pmax <= tol * (1.0 + xmax) * 1e3:
+            # At the minimum on the working set: keep it, or free the worst active bound.
             mu = sol[nf]
             for a in range(nf):
                 x[F[a]] = sol[a]
-            # Multipliers of the active bounds: ν = W x + μ e − b must be ≥ 0 (ν is a
-            # rate of gap change per unit squeeze, dimensionless like b).
-            worst, arg = -1e-10 * bscale, -1
-            for i in range(n):
-                if fixed[i]:
-                    nu = -bj[i] + mu * ej[i]
-                    for c in range(n):
-                        nu += Wj[i, c] * x[c]
-                    if nu < worst:
-                        worst, arg = nu, i
+            arg = _most_negative(_bound_multipliers(Wj, bj, ej, x, mu, fixed), -1e-10 * bscale)
             if arg < 0:
                 return x, mu
             fixed[arg] = False
             continue
-        alpha, block = 1.0, -1
-        for a in range(nf):
-            i = F[a]
-            p = sol[a] - x[i]
-            if zmask[i] and p < 0:
-                r = -x[i] / p
-                if r < alpha:
-                    alpha, block = r, i
-        for a in range(nf):
-            x[F[a]] += alpha * (sol[a] - x[F[a]])
-        if block >= 0:
-            x[block] = 0.0
-            fixed[block] = True
-    mu = 0.0
-    return x, mu
+        _step_to_bound(x, sol, F, zmask, fixed)
+    return x, 0.0       # no convergence: no drift
+
+
+@njit(cache=True, nogil=True)
+def _most_negative(values, below):  # pragma: no cover - compiled
+    """Index of the first smallest of ``values`` strictly below ``below``, or −1."""
+    worst, arg = below, -1
+    for i in range(values.shape[0]):
+        if values[i] < worst:
+            worst, arg = values[i], i
+    return arg
+
+
+@njit(cache=True, nogil=True)
+def _equality_qp(Wj, bj, ej, F):  # pragma: no cover - compiled
+    """Solution ``[x_F, μ]`` of ``min ½xᵀWx − bᵀx`` on the free set ``F`` with ``eᵀx = 0``
+    (the other entries held at 0): its KKT system."""
+    nf = F.shape[0]
+    K = np.zeros((nf + 1, nf + 1))
+    rhs = np.zeros(nf + 1)
+    for a in range(nf):
+        for c in range(nf):
+            K[a, c] = Wj[F[a], F[c]]
+        K[a, nf] = ej[F[a]]
+        K[nf, a] = ej[F[a]]
+        rhs[a] = bj[F[a]]
+    return np.linalg.solve(K, rhs)
+
+
+@njit(cache=True, nogil=True)
+def _bound_multipliers(Wj, bj, ej, x, mu, fixed):  # pragma: no cover - compiled
+    """Multipliers ``ν = W x + μ e − b`` of the active bounds (``inf`` elsewhere): all must
+    be ≥ 0 at the optimum (ν is a rate of gap change per unit squeeze, dimensionless like b)."""
+    n = bj.shape[0]
+    out = np.full(n, np.inf)
+    for i in range(n):
+        if fixed[i]:
+            nu = -bj[i] + mu * ej[i]
+            for c in range(n):
+                nu += Wj[i, c] * x[c]
+            out[i] = nu
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _step_to_bound(x, sol, F, zmask, fixed):  # pragma: no cover - compiled
+    """Move the free entries ``x_F`` towards ``sol`` until a bounded one reaches 0 (it is
+    then fixed), in place."""
+    nf = F.shape[0]
+    alpha, block = 1.0, -1
+    for a in range(nf):
+        i = F[a]
+        p = sol[a] - x[i]
+        if zmask[i] and p < 0:
+            r = -x[i] / p
+            if r < alpha:
+                alpha, block = r, i
+    for a in range(nf):
+        x[F[a]] += alpha * (sol[a] - x[F[a]])
+    if block >= 0:
+        x[block] = 0.0
+        fixed[block] = True
 
 
 @njit(cache=True, nogil=True)

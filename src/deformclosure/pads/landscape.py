@@ -68,6 +68,17 @@ class AxisGrid:
         return cls(start.angle, start.offset, math.pi / n_angles, dc, n_angles, j_min, j_max,
                    wrap, start.origin)
 
+    @classmethod
+    def over_part(cls, solver: PadContact, start: GraspAxis, pad: Pad, n_angles: int = 48,
+                  n_offsets: int = 50) -> "AxisGrid":
+        """Grid through ``start`` covering every axis on which ``pad`` can reach the part's
+        outer ring: offsets up to the ring's farthest node from ``start.origin`` plus the
+        pad's half span (m)."""
+        mesh = solver.mesh
+        ring = mesh.nodes[mesh.outer_loop]
+        reach = float(np.linalg.norm(ring - np.asarray(start.origin), axis=1).max()) + pad.half_span
+        return cls.around(start, reach, mesh.diameter, n_angles, n_offsets)
+
     @property
     def n_offsets(self) -> int:
         """Number of offsets per angle."""

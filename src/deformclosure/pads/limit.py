@@ -13,17 +13,32 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..elasticity.critical_distance import averaged_strains, averaging_operator
-from ..elasticity.strain import element_strains, principal_strains
+from ..elasticity.critical_distance import averaged_strains
+from ..elasticity.strain import principal_strains
+from ..errors import GraspError
 from .contact import GraspCurve, PadContact
 
-__all__ = ["PadLimit", "pad_elastic_limit", "critical_distance_of"]
+__all__ = ["PadLimit", "pad_elastic_limit", "critical_distance_of", "elastic_limit_strain_of"]
 
 
 def critical_distance_of(mesh) -> float:
     """The material's critical distance ``ℓ`` (m), default 2 % of the part's diameter."""
     cd = getattr(mesh.material, "critical_distance", None) if mesh.material is not None else None
     return 0.02 * mesh.diameter if cd is None else float(cd)
+
+
+def elastic_limit_strain_of(mesh) -> float:
+    """The material's elastic-limit strain ``e_L``; a pad grasp needs it.
+
+    Raises
+    ------
+    GraspError
+        When the mesh has no material.
+    """
+    if getattr(mesh, "material", None) is None:
+        raise GraspError("material: the mesh has no material; give a part file or a mesh JSON "
+                         "with a material")
+    return mesh.material.elastic_limit_strain
 
 
 @dataclass(frozen=True)
@@ -72,16 +87,15 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     ell : float, optional
         Critical distance (m); default from the material (2 % of the diameter).
     operator : sparse matrix, optional
-        Precomputed averaging operator for ``ell``.
+        Averaging operator for ``ell``; default the solver's own, built once per mesh and
+        ``ell`` (:meth:`PadContact.averaging_operator`).
     """
     mesh = solver.mesh
     ell = critical_distance_of(mesh) if ell is None else ell
-    A = averaging_operator(mesh, ell) if operator is None else operator
+    A = solver.averaging_operator(ell) if operator is None else operator
     path = curve.path
-    lam = path.lam
-    F = np.column_stack([solver.load_vector(curve, l) for l in lam])
-    U = solver.displacement(F)                                   # (2n, k)
-    E = np.stack([element_strains(mesh, U[:, j]) for j in range(U.shape[1])])   # (k, m, 3)
+    F = np.column_stack([solver.load_vector(curve, l) for l in path.lam])
+    E = solver.element_strains(solver.displacement(F))           # (k, m, 3)
     Ebar = averaged_strains(mesh, E, None, operator=A)
     e_bp = _magnitudes(Ebar).max(axis=1)
     above = np.flatnonzero(e_bp >= e_L)
@@ -89,22 +103,25 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
         j = len(e_bp) - 1
         elem = int(np.argmax(_magnitudes(Ebar[j])))
         return PadLimit(curve.sigma_end, ell, elem, e_bp, float(_magnitudes(E[j]).max()))
-    j = int(above[0])
-    if j == 0:
-        s_lo = s_hi = 0.0
-        i0 = i1 = 0
-    else:
-        i0, i1 = j - 1, j
-        s_lo, s_hi = 0.0, 1.0
-        for _ in range(60):   # convex in s on the piece, below e_L at 0, above at 1
-            s = 0.5 * (s_lo + s_hi)
-            if _magnitudes((1 - s) * Ebar[i0] + s * Ebar[i1]).max() >= e_L:
-                s_hi = s
-            else:
-                s_lo = s
-    s = s_hi
+    i0, i1, s = _crossing(Ebar, int(above[0]), e_L)
     delta = (1 - s) * path.delta[i0] + s * path.delta[i1]
     Tbar = (1 - s) * Ebar[i0] + s * Ebar[i1]
     T = (1 - s) * E[i0] + s * E[i1]
     return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell, int(np.argmax(_magnitudes(Tbar))),
                     e_bp, float(_magnitudes(T).max()))
+
+
+def _crossing(Ebar: np.ndarray, j: int, e_L: float) -> tuple[int, int, float]:
+    """Where the averaged strain magnitude first reaches ``e_L``, breakpoint ``j`` being the
+    first at or above it: the piece ``(i0, i1)`` and the fraction ``s`` along it."""
+    if j == 0:
+        return 0, 0, 0.0
+    i0, i1 = j - 1, j
+    s_lo, s_hi = 0.0, 1.0
+    for _ in range(60):   # convex in s on the piece, below e_L at 0, above at 1
+        s = 0.5 * (s_lo + s_hi)
+        if _magnitudes((1 - s) * Ebar[i0] + s * Ebar[i1]).max() >= e_L:
+            s_hi = s
+        else:
+            s_lo = s
+    return i0, i1, s_hi

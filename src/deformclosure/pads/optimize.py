@@ -24,7 +24,7 @@ from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid, Landscape, Release
 from .noise import jitter_noise
-from .limit import PadLimit, pad_elastic_limit
+from .limit import PadLimit, elastic_limit_strain_of, pad_elastic_limit
 
 __all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
 
@@ -185,91 +185,69 @@ def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
 
 def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
                   twin: PadContact | None = None, hole: int | None = None,
-                  twin_hole: int | None = None, n_angles: int = 48, n_offsets: int = 50, n_samples: int = 48,
-                  n_curve: int = 120, noise: bool = True) -> PadGraspResult:
-    """Optimal separation of a two-pad grasp on ``axis`` (contracting).
+                  twin_hole: int | None = None, n_angles: int = 48, n_offsets: int = 50,
+                  n_samples: int = 48, n_curve: int = 120, noise: bool = True) -> PadGraspResult:
+    """Optimal separation ``σ* = argmax min(U_A, U_L)`` of a two-pad grasp on ``axis``.
 
     Parameters
     ----------
     mesh : Mesh
-        With a material (``e_L``, optional ``critical_distance``).
+        Nodes in m, with a material (``e_L``, optional ``critical_distance`` in m).
     axis : GraspAxis
-        Start axis in the part frame.
+        Start axis in the part frame (angle in rad, offset in m).
     pad : Pad
+        Width and end radius in m.
     solver : PadContact, optional
         Reuse a factorisation of this mesh.
-    n_angles, n_offsets : int
-        Landscape grid: ``Δθ = π/n_angles``, ``Δc = D/n_offsets`` (D = diameter).
-    n_samples : int
-        Initial σ samples of the exact search.
-    n_curve : int
-        Samples of the plotted curve.
+    twin : PadContact, optional
+        The part meshed again (:func:`.noise.twin_mesh`): the noise floor from its energies
+        on the axes compared; without it, from the jitter under sub-cell moves of the axis.
     hole, twin_hole : int, optional
         Expanding grasp: the pads open inside this hole of ``mesh`` (of ``twin``),
         starting at the axis point nearest the hole's centroid; ``σ`` grows from ``σ0``.
-    twin : PadContact, optional
-        The same part meshed as a second realisation (:func:`.noise.twin_mesh`); its
-        energies at the start axis and its neighbours give the noise floor. Without it,
-        the jitter under sub-cell moves of the axis is used.
+    n_angles, n_offsets : int
+        Landscape grid: ``Δθ = π/n_angles`` (rad), ``Δc = D/n_offsets`` (m, D = diameter).
+    n_samples, n_curve : int
+        σ samples that start the exact search, and of the plotted curve (each at least 2).
     noise : bool
         Measure and use the landscape's noise floor (see :mod:`.noise`).
 
     Returns
     -------
     PadGraspResult
-    """
-    if mesh.material is None:
-        raise GraspError("material: the mesh has no material; give a part file or a mesh JSON "
-                         "with a material")
-    solver = PadContact(mesh) if solver is None else solver
-    ax0 = GraspAxis(axis.angle, axis.offset, axis.origin)
-    if hole is None:
-        start_curve = solver.curve(ax0, pad, 0.0)
-    else:
-        # Open up to three times the rest width, or until the elastic limit (below).
-        touch = solver.curve(ax0, pad, -np.inf, hole)
-        start_curve = touch if touch.touch is None else solver.curve(ax0, pad, 3 * touch.sigma0, hole)
-    if start_curve.touch is None:
-        where = ("the pads miss the part on this axis; move the axis onto the part" if hole is None
-                 else "the pads do not fit in the hole on this axis, or the axis misses its centre")
-        raise GraspError(f"axis: {where}")
-    if start_curve.path is None:
-        raise GraspError("axis: no mesh node within the pads' reach at first touch; refine the "
-                         "mesh (mesh.max_area) or use larger pads")
-    sigma0 = start_curve.sigma0
-    limit = pad_elastic_limit(solver, start_curve, mesh.material.elastic_limit_strain)
-    sigma_L = limit.sigma_L
-    # Re-anchor the axis at the area centroid so the grid's wrap (θ+π, −c) is exact.
-    cen = solver.centroid
-    start_axis = GraspAxis.at(axis.point, axis.angle, cen)
-    ring = mesh.nodes[mesh.outer_loop]
-    reach = float(np.linalg.norm(ring - cen, axis=1).max()) + pad.half_span
-    grid = AxisGrid.around(start_axis, reach, mesh.diameter, n_angles, n_offsets)
-    land = Landscape(solver, pad, grid, sigma_L, hole)
-    s = grid.vertex(0, 0)
-    land.seed(s, start_curve)
-    Us = start_curve.energy_at
+        σ0, σ_L, σ* in m; quality, U_A, U_L in J.
 
-    if not noise:
-        tau = lambda sig: 0.0  # noqa: E731
-    else:
-        # Two views of the noise: the jitter under sub-cell moves of the start axis (the
-        # nodes' positions under the pads) and, with a twin, the spread between two mesh
-        # realisations over every axis the search compares. The larger counts.
-        jitter = jitter_noise(solver, pad, start_axis, grid.d_offset, grid.d_angle, sigma_L,
-                              hole=hole)
-        if twin is not None and (hole is None or twin_hole is not None):
-            land.twin = Landscape(twin, pad, grid, sigma_L, twin_hole)
-        tau = lambda sig: max(jitter(sig), land.noise(sig))  # noqa: E731
+    Raises
+    ------
+    GraspError
+        No material, a count out of range, or pads that miss the part on ``axis``.
+
+    Examples
+    --------
+    Round 2 mm pads seated in the V-notches of the notched bar (about 1 s):
+
+    >>> from deformclosure import mesh_part, notched_part
+    >>> from deformclosure.pads import GraspAxis, Pad
+    >>> mesh = mesh_part(notched_part(), max_area=1e-6)            # m²
+    >>> res = optimize_pads(mesh, GraspAxis(1.5707963, -0.015), Pad(0.0, 2e-3),
+    ...                     n_angles=8, n_offsets=8, noise=False)
+    >>> round(res.sigma0 * 1e3, 3), res.verdict                    # mm
+    (7.657, 'held')
+    """
+    e_L = elastic_limit_strain_of(mesh)
+    _check_counts(n_angles=n_angles, n_offsets=n_offsets, n_samples=(n_samples, 2),
+                  n_curve=(n_curve, 2))
+    solver = PadContact(mesh) if solver is None else solver
+    start_curve = _start_curve(solver, GraspAxis(axis.angle, axis.offset, axis.origin), pad, hole)
+    sigma0 = start_curve.sigma0
+    limit = pad_elastic_limit(solver, start_curve, e_L)
+    sigma_L = limit.sigma_L
+    land, start_axis = _landscape(solver, axis, pad, start_curve, sigma_L, hole, n_angles,
+                                  n_offsets)
+    grid, s, Us = land.grid, land.grid.vertex(0, 0), start_curve.energy_at
+    tau = _noise_floor(land, start_axis, twin, twin_hole) if noise else (lambda sig: 0.0)
     U_sL = float(Us(sigma_L))
-    # With a twin the noise floor grows as the search visits more axes: repeat the search
-    # until every axis it compares has been measured on both realisations.
-    for _ in range(4):
-        best, ev = _search_sigma_star(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples)
-        if land.twin is None or not noise or not land.measure_noise():
-            break
-    sigma_star = None if best is None else best[1]
-    e_star = ev(sigma0 if sigma_star is None else sigma_star)
+    sigma_star, e_star = _optimum(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples, noise)
     sig_n = sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)
     curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star)
     rel = e_star.release
@@ -283,8 +261,78 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         U_L=e_star.UL if sigma_star is not None else 0.0,
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
-        start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=mesh.material.elastic_limit_strain,
+        start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=e_L,
         warnings=_resolution_warnings(mesh, pad, hole), solver=solver)
+
+
+def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: GraspCurve,
+               sigma_L: float, hole: int | None, n_angles: int, n_offsets: int
+               ) -> tuple[Landscape, GraspAxis]:
+    """The release landscape of ``axis`` traced to ``sigma_L`` (m), its start (vertex
+    ``(0, 0)``) seeded with ``start_curve``, and the start axis re-anchored at the area
+    centroid, so that the grid's wrap ``(θ + π, −c)`` is exact."""
+    start_axis = GraspAxis.at(axis.point, axis.angle, solver.centroid)
+    grid = AxisGrid.over_part(solver, start_axis, pad, n_angles, n_offsets)
+    land = Landscape(solver, pad, grid, sigma_L, hole)
+    land.seed(grid.vertex(0, 0), start_curve)
+    return land, start_axis
+
+
+def _optimum(land: Landscape, s: int, Us, U_sL: float, sigma_L: float, sigma0: float, tau,
+             n_samples: int, noise: bool) -> tuple[float | None, _Eval]:
+    """``σ*`` (``None`` when ``Q ≡ 0``) and the evaluation there (at ``σ0`` without one).
+
+    With a twin the noise floor grows as the search visits more axes: the search is
+    repeated until every axis it compares has been measured on both realisations.
+    """
+    for _ in range(4):
+        best, ev = _search_sigma_star(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples)
+        if land.twin is None or not noise or not land.measure_noise():
+            break
+    sigma_star = None if best is None else best[1]
+    return sigma_star, ev(sigma0 if sigma_star is None else sigma_star)
+
+
+def _check_counts(**counts) -> None:
+    """Each ``name=value`` or ``name=(value, least)`` a whole number ≥ least (default 1)."""
+    for name, spec in counts.items():
+        value, least = spec if isinstance(spec, tuple) else (spec, 1)
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < least:
+            raise GraspError(f"{name} = {value!r}: give a whole number >= {least}")
+
+
+def _start_curve(solver: PadContact, ax0: GraspAxis, pad: Pad, hole: int | None) -> GraspCurve:
+    """The start axis' curve: closed to σ = 0, or (expanding) opened to three times the
+    rest width, or until the elastic limit; refused if the pads do not grip there."""
+    if hole is None:
+        start_curve = solver.curve(ax0, pad, 0.0)
+    else:
+        touch = solver.curve(ax0, pad, -np.inf, hole)
+        start_curve = touch if touch.touch is None else solver.curve(ax0, pad, 3 * touch.sigma0, hole)
+    if start_curve.touch is None:
+        where = ("the pads miss the part on this axis; move the axis onto the part" if hole is None
+                 else "the pads do not fit in the hole on this axis, or the axis misses its centre")
+        raise GraspError(f"axis: {where}")
+    if start_curve.path is None:
+        raise GraspError("axis: no mesh node within the pads' reach at first touch; refine the "
+                         "mesh (mesh.max_area) or use larger pads")
+    return start_curve
+
+
+def _noise_floor(land: Landscape, start: GraspAxis, twin: PadContact | None,
+                 twin_hole: int | None):
+    """The relative noise floor ``tau(σ)`` of the landscape's start axis ``start``.
+
+    Two views of the noise: the jitter under sub-cell moves of the start axis (the nodes'
+    positions under the pads) and, with a twin, the spread between two mesh realisations
+    over every axis the search compares (attached to ``land``). The larger counts.
+    """
+    grid, hole = land.grid, land.hole
+    jitter = jitter_noise(land.solver, land.pad, start, grid.d_offset, grid.d_angle,
+                          land.sigma_end, hole=hole)
+    if twin is not None and (hole is None or twin_hole is not None):
+        land.twin = Landscape(twin, land.pad, grid, land.sigma_end, twin_hole)
+    return lambda sig: max(jitter(sig), land.noise(sig))
 
 
 def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:

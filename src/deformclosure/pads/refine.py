@@ -32,6 +32,9 @@ from .optimize import PadGraspResult, optimize_pads
 
 __all__ = ["RefinedPadGrasp", "richardson", "pad_grasp"]
 
+#: Keyword options :func:`pad_grasp` passes on to :func:`optimize_pads`.
+_OPTIONS = frozenset({"n_angles", "n_offsets", "n_samples", "n_curve", "noise"})
+
 
 def richardson(values: list[float]) -> tuple[float, float, float | None]:
     """Extrapolated value, error estimate and observed order from a halving sequence.
@@ -47,7 +50,12 @@ def richardson(values: list[float]) -> tuple[float, float, float | None]:
         ``order`` is ``None`` with fewer than three values (then ``p = 1``) or when the
         differences do not shrink monotonically (then ``p = 0.5``, a wide error).
     """
-    v = [float(x) for x in values]
+    try:
+        v = [float(x) for x in values]
+    except (TypeError, ValueError):
+        raise GraspError(f"values = {values!r}: give a list of numbers") from None
+    if not v:
+        raise GraspError("values: give at least one value")
     if len(v) < 2:
         return v[-1], math.nan, None
     if len(v) == 2:
@@ -125,7 +133,9 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
     part : Part or None
         The part (needed for ``refine > 1`` and for the twin realisation).
     axis : GraspAxis
+        Start axis in the part frame (angle in rad, offset in m).
     pad : Pad
+        Width and end radius in m.
     mesh : Mesh, optional
         The first mesh (default: the part meshed with its own settings).
     refine : int
@@ -137,12 +147,36 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
     progress : callable, optional
         Called with ``(level, n_levels)`` before each level.
     **options
-        Passed to :func:`optimize_pads` (``n_angles``, ``n_offsets``, …).
+        Passed to :func:`optimize_pads`: ``n_angles``, ``n_offsets``, ``n_samples``,
+        ``n_curve``, ``noise``.
+
+    Returns
+    -------
+    RefinedPadGrasp
+        One :class:`PadGraspResult` per mesh (σ in m, energies in J), the finest last,
+        with the Richardson error estimate and the verdict.
+
+    Raises
+    ------
+    GraspError
+        A bad ``refine``, ``axis``, ``pad`` or option, no part or mesh, a point not in a
+        hole, or any refusal of :func:`optimize_pads`.
+
+    Examples
+    --------
+    Round 2 mm pads in the notches of the notched bar, one coarse mesh (about 1 s):
+
+    >>> import math
+    >>> from deformclosure import mesh_part, notched_part
+    >>> from deformclosure.pads import GraspAxis, Pad
+    >>> part = notched_part()
+    >>> res = pad_grasp(part, GraspAxis(math.pi / 2, -0.015), Pad(0.0, 2e-3),
+    ...                 mesh=mesh_part(part, max_area=1e-6), twin=False,
+    ...                 n_angles=8, n_offsets=8, noise=False)
+    >>> res.verdict, round(res.finest.sigma0 * 1e3, 3)              # mm
+    ('held', 7.657)
     """
-    if not (isinstance(refine, int) and 1 <= refine <= 5):
-        raise GraspError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
-    if part is None and refine > 1:
-        raise GraspError("--refine: needs a part file (a mesh file cannot be re-meshed)")
+    _check_request(part, axis, pad, refine, options)
     if mesh is None:
         if part is None:
             raise GraspError("part: give a part or a mesh")
@@ -155,16 +189,36 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
         area = base / 4.0**k
         m = mesh if k == 0 else mesh_part(part, max_area=area)
         tw = PadContact(twin_mesh(part, max_area=area)) if (twin and part is not None) else None
-        holes = {}
-        if expanding_from is not None:
-            holes["hole"] = hole_containing(m, expanding_from)
-            if holes["hole"] is None:
-                raise GraspError("--expanding: the axis point is not inside a hole of the part; "
-                                 "give --at points on a hole's boundary or an --axis point in it")
-            holes["twin_hole"] = None if tw is None else hole_containing(tw.mesh, expanding_from)
+        holes = {} if expanding_from is None else _holes(m, tw, expanding_from)
         t0 = time.perf_counter()
         levels.append(optimize_pads(m, axis, pad, twin=tw, **holes, **options))
         areas.append(area)
         done("mesh %d of %d (%d nodes): Q* = %.6g J, %d grasp axes solved", t0,
              k + 1, refine, m.n_nodes, levels[-1].quality, levels[-1].n_axes)
     return RefinedPadGrasp(levels, areas)
+
+
+def _check_request(part, axis, pad, refine, options: dict) -> None:
+    """Refuse a bad ``refine``, ``axis``, ``pad`` or option of :func:`pad_grasp`."""
+    if isinstance(refine, bool) or not (isinstance(refine, int) and 1 <= refine <= 5):
+        raise GraspError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
+    if not isinstance(axis, GraspAxis):
+        raise GraspError(f"axis = {axis!r}: give a GraspAxis (angle in rad, offset in m)")
+    if not isinstance(pad, Pad):
+        raise GraspError(f"pad = {pad!r}: give a Pad (width and radius in m)")
+    unknown = sorted(set(options) - _OPTIONS)
+    if unknown:
+        raise GraspError(f"{unknown[0]}: not an option of a pad grasp; use "
+                         f"{', '.join(sorted(_OPTIONS))}")
+    if part is None and refine > 1:
+        raise GraspError("--refine: needs a part file (a mesh file cannot be re-meshed)")
+
+
+def _holes(mesh, twin: PadContact | None, point) -> dict:
+    """``hole`` and ``twin_hole`` of an expanding grasp: the holes of ``mesh`` and of the
+    twin's mesh that contain ``point`` (m)."""
+    hole = hole_containing(mesh, point)
+    if hole is None:
+        raise GraspError("--expanding: the axis point is not inside a hole of the part; "
+                         "give --at points on a hole's boundary or an --axis point in it")
+    return {"hole": hole, "twin_hole": None if twin is None else hole_containing(twin.mesh, point)}
