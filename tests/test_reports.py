@@ -122,3 +122,27 @@ def test_every_table_option_is_in_the_help():
         text = cmd.get_help(click.Context(cmd, info_name=command))
         for opt in table:
             assert opt.flags[-1] in text, (command, opt.flags)
+
+
+def test_a_drawing_and_its_material_file_travel_together(tmp_path):
+    """A drawing's ``<name>.material.json`` is read with it: by the CLI road (a path), and
+    by batch workers (the bytes of both, the material file's digest in the job key)."""
+    import shutil
+
+    from deformclosure.batch import load_jobs, read_results, run_batch
+
+    for name in ("gasket.dxf", "gasket.material.json"):
+        shutil.copy(EXAMPLES / "drawings" / name, tmp_path / name)
+    jobs_file = tmp_path / "jobs.json"
+    jobs_file.write_text(json.dumps([{"part": "gasket.dxf", "command": "mesh"}]))
+    direct = reports.run("mesh", tmp_path / "gasket.dxf").data
+    assert [i["name"] for i in direct["provenance"]["inputs"]] == ["gasket.dxf",
+                                                                  "gasket.material.json"]
+    jobs = load_jobs(jobs_file)
+    run_batch(jobs, tmp_path / "r.sqlite", scheduler="inline", progress=False)
+    (row,) = read_results(tmp_path / "r.sqlite")
+    assert row["status"] == "ok", row["error"]
+    assert row["result"] == json.loads(json.dumps(direct))
+    side = tmp_path / "gasket.material.json"
+    side.write_text(side.read_text().replace("0.8", "0.7"))
+    assert load_jobs(jobs_file)[0].key != jobs[0].key

@@ -62,6 +62,9 @@ class Source:
         the format.
     data : bytes
         The file's content.
+    sidecar : Source, optional
+        A file that belongs to this one and travels with it: the material file
+        ``<name>.material.json`` beside a drawing (:func:`deformclosure.drawing.material_file_beside`).
 
     Examples
     --------
@@ -72,6 +75,7 @@ class Source:
 
     name: str
     data: bytes
+    sidecar: "Source | None" = None
 
     @property
     def suffix(self) -> str:

@@ -143,6 +143,7 @@ class Job:
         params, inputs = _parse_options(command, options, base, where, opt_root)
         path, real = _part_path(part_str, base, where, root_p)
         digest = _digest(path, where, f"part {part_str!r}")
+        inputs += _sidecar(path, where)
         kparams = key_blob_params(command, params, inputs)
         shown = part_str if Path(part_str).is_absolute() or base_dir is None \
             else str(Path(base_dir) / part_str)
@@ -278,13 +279,29 @@ def _parse_options(command: str, options: tuple[str, ...], base: Path, where: st
     return params, tuple(inputs)
 
 
+#: Name of a drawing's material file (``<name>.material.json``) among a job's inputs; it
+#: travels with the drawing (:attr:`deformclosure.jsonfile.Source.sidecar`).
+SIDECAR = "sidecar"
+
+
+def _sidecar(path: Path, where: str) -> tuple[tuple[str, str, str], ...]:
+    """The material file beside a drawing, as an input of the job (none otherwise)."""
+    from ..drawing import is_drawing_file, material_file_beside
+
+    side = material_file_beside(path) if is_drawing_file(path) else None
+    if side is None:
+        return ()
+    return ((SIDECAR, str(side), _digest(side, where, f"material file {side.name!r}")),)
+
+
 def key_blob_params(command: str, params: dict, inputs: Sequence[tuple[str, str, str]]) -> dict:
     """The parameters that enter the key: outputs and display options left out, input
-    files replaced by ``{"sha256": ...}`` of their bytes."""
+    files replaced by ``{"sha256": ...}`` of their bytes (a drawing's material file as
+    ``sidecar``)."""
     from ..reports import key_params
 
     digests = {name: digest for name, _, digest in inputs}
-    out = {}
+    out = {SIDECAR: {"sha256": digests[SIDECAR]}} if SIDECAR in digests else {}
     for name, value in key_params(command, params).items():
         if name in digests:
             value = {"sha256": digests[name]}

@@ -60,10 +60,16 @@ def payload(job: Job, version: str) -> dict:
                             "batch again")
         return Source(shown, data)
 
-    params = dict(job.params)
+    from .jobs import SIDECAR
+
+    params, sidecar = dict(job.params), None
     for name, path, digest in job.inputs:
-        params[name] = source(path, digest, path)
-    return {"command": job.command, "part": source(job.path, job.digest, job.part),
+        if name == SIDECAR:            # a drawing's material file travels with the drawing
+            sidecar = source(path, digest, path)
+        else:
+            params[name] = source(path, digest, path)
+    part = source(job.path, job.digest, job.part)
+    return {"command": job.command, "part": Source(part.name, part.data, sidecar),
             "params": params, "version": version}
 
 

@@ -26,7 +26,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     s = length_scale(prt.units)
     line = (f"{prt.name}: outer ring of {len(prt.outer)} vertices, {len(prt.holes)} hole(s), "
             f"area {prt.area / s**2:.6g} {prt.units}^2")
-    sources = [src] + ([mat] if isinstance(mat, Source) else [])
+    sources = [src, src.sidecar] + ([mat] if isinstance(mat, Source) else [])
     data = {**prt.to_dict(), "provenance": provenance(sources)}
     return Report("import", data, [line], list(prt.sanity_warnings()), p, prt, _writer)
 

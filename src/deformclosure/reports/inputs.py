@@ -29,7 +29,14 @@ def source_of(file: Any, what: str = "input file") -> Source:
 
     error = {"finger file": FingerError, "part file": PartError, "drawing": PartError,
              "material file": PartError}.get(what, DeformClosureError)
-    return as_source(file, error, what)
+    src = as_source(file, error, what)
+    if what in ("part file", "drawing") and not isinstance(file, Source):
+        from ..drawing import is_drawing_file, material_file_beside
+
+        side = material_file_beside(file) if is_drawing_file(src) else None
+        if side is not None:               # the drawing's material travels with it
+            src = Source(src.name, src.data, as_source(side, error, "material file"))
+    return src
 
 
 def material_of(material: Any) -> str | Source | None:
@@ -99,7 +106,7 @@ def read_inputs(file: Any, units: str | None = None, material: Any = None, *,
     if units is not None:
         length_scale(units, "--units")
     mat = material_of(material)
-    sources = [src] + ([mat] if isinstance(mat, Source) else [])
+    sources = [src, src.sidecar] + ([mat] if isinstance(mat, Source) else [])
     if is_mesh_file(src):
         m = None if mat is None else read_material(mat, units or "m")
         msh = read_mesh(src, units=units or "m", material=m)
