@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -18,13 +19,65 @@ RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
           "elastic_limit_strain": 0.8, "plane": "stress"}
 
 
+#: Single parameter sets of parametrised tests that are slow (``file::test[id]``). Whole
+#: tests and modules are marked in their own files (``@pytest.mark.slow``, ``pytestmark``);
+#: this table is for the cases of a parametrisation whose other cases stay in the default
+#: run as its cheap representatives. The default run (``addopts`` in pyproject.toml)
+#: deselects ``slow``; ``python -m pytest -q -p no:cacheprovider -m slow tests`` runs them.
+SLOW_PARAMS = {
+    "test_docs_examples.py::test_doc_example_runs[README.md-1]",
+    "test_docs_examples.py::test_doc_example_runs[batch.md-0]",
+    "test_docs_examples.py::test_doc_example_runs[dspace.md-1]",     # placement-energy JIT
+    "test_swing_reference.py::test_c_shape_example_matches_reference[fine_134_nodes]",
+    "test_swing_reference.py::test_example_parts_match_reference[plate_with_hole]",
+    "test_swing_reference.py::test_example_parts_match_reference[ring]",
+    # One command-line subprocess each (about 1 s of interpreter start-up): the default run
+    # keeps one or two cases per command (deep nesting, fifo, finger radius true, at 1e308,
+    # slice extent 1e300; same node, outside, eps 0).
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[utf16 garbage]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[not utf-8]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[duplicate key]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[5000-digit integer]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[400-digit integer]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[NaN]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[obj zero-based]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[obj out of range]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[finger string coordinate]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[half-plane normal 1e308]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[eps 1e-300]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[units empty]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[jaw width 1e308]",
+    "test_hostile_inputs.py::test_hostile_input_is_one_line_exit_2[pad radius 1e308]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args1-interior]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args4-eps]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args5-width]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args6-node]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args7-]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args8---at]",
+    "test_cli_optimize.py::test_bad_optimize_input_is_one_line_exit_2[args9-jaws]",
+}
+
+
 def pytest_configure(config):
     config.addinivalue_line(
         "markers", "late: run after all other tests (e.g. they read results of subprocesses "
         "started in the background at collection)")
 
 
+@pytest.hookimpl(tryfirst=True)         # before -m/-k deselect, which read the marks
 def pytest_collection_modifyitems(config, items):
+    seen_files = {item.path.name for item in items}
+    found = set()
+    for item in items:
+        key = f"{item.path.name}::{item.name}"
+        if key in SLOW_PARAMS:
+            item.add_marker(pytest.mark.slow)
+            found.add(key)
+    whole_files = not any("::" in a for a in config.args)     # not a run of single tests
+    stale = {k for k in SLOW_PARAMS - found if k.partition("::")[0] in seen_files}
+    if stale and whole_files:
+        warnings.warn(pytest.PytestWarning(f"tests/conftest.py SLOW_PARAMS names tests that do "
+                                           f"not exist (renamed?): {sorted(stale)}"))
     # Stable sort: order is kept within the early and the late groups.
     items.sort(key=lambda item: item.get_closest_marker("late") is not None)
 

@@ -14,6 +14,8 @@ import pytest
 import deformclosure as dc
 from deformclosure.grasp.analysis import grasp_model, optimize_separation
 
+pytestmark = pytest.mark.slow
+
 MAT = {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "thickness": 1.0,
        "elastic_limit_strain": 0.5, "plane": "stress"}
 

@@ -516,6 +516,7 @@ def _slow_jobs(d: Path, n: int) -> Path:
 
 
 @pytest.mark.skipif(not Path("/proc").is_dir(), reason="needs /proc")
+@pytest.mark.slow
 def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
     """Ctrl-C of a batch on worker processes: one line, exit 130, the workers gone, and
     no folder of ours in the temporary folder (workers get bytes, not copies)."""

@@ -124,7 +124,7 @@ def _start_background_runs():
                       "-o", str(tmp / f"{name}.out.json")]
 
     def run(cmd):
-        return subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, env=env, timeout=300)
+        return subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, env=env, timeout=900)
 
     pool = ThreadPoolExecutor(max_workers=2)
     futures = {k: pool.submit(run, cmd) for k, cmd in jobs.items()}

@@ -421,6 +421,7 @@ def _run_cli(argv):
     return main(argv)
 
 
+@pytest.mark.slow
 def test_cli_check_report_and_plot(tmp_path, capsys):
     part = tmp_path / "part.json"
     part.write_text(json.dumps({"name": "sq", "units": "mm", "outer": [[0, 0], [20, 0], [20, 20], [0, 20]],

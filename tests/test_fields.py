@@ -129,6 +129,7 @@ def test_bad_field_file_is_refused_before_the_work(tmp_path, capsys):
     assert err.startswith("error: --export-fields") and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_check_fields_at_the_equilibrium(tmp_path):
     """Contact forces balance, and their work on the elastic displacement is twice the
     equilibrium energy of the report (Clapeyron); the strain of the file is that of the

@@ -109,7 +109,8 @@ def test_signed_distance_agrees_with_an_independent_computation(f, pts):
 def test_outward_normal_is_the_gradient_of_the_independent_distance(f, p):
     p = np.asarray(p)
     sd = float(reference_distance(f, p))
-    assume(abs(sd) > 1e-6 * L or not isinstance(f, PointFinger))
+    # on the boundary the normal is one-sided, and at a corner not a gradient at all
+    assume(abs(sd) > 1e-6 * L)
     n = f.outward_normal(p)
     assert abs(np.linalg.norm(n) - 1.0) < 1e-12
     # moving along the normal raises the distance at unit rate (one-sided at kinks)

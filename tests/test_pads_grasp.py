@@ -76,6 +76,7 @@ def notched_coarse():
     return mesh, pc, res
 
 
+@pytest.mark.slow
 def test_exact_sigma_star_equals_dense_sampling(notched_coarse):
     """Q evaluated by its definition on 3000 separations never exceeds the exact Q*, and
     comes within one sample step's variation of it."""
@@ -97,6 +98,7 @@ def test_exact_sigma_star_equals_dense_sampling(notched_coarse):
     assert q_star == pytest.approx(res.quality, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_asymmetric_part_best_axis_is_not_on_a_symmetry_line():
     """Notches cut along a line tilted 30° from the vertical, in a bar with no mirror line:
     the planner's best closing axis runs along the notches' common bisector (60° from the
@@ -182,6 +184,7 @@ def _expand(part, p, q, pad):
                      expanding_from=mid).finest
 
 
+@pytest.mark.slow
 def test_pads_opening_into_the_corners_of_a_rhombus_hole_hold():
     """Opened along the long diagonal, round pads sit in the acute corners: a sideways
     shift or a turn shortens the chord, so the pads must squeeze harder to leave."""

@@ -34,6 +34,7 @@ PARTS = [("dogbone", 0.4), ("rectangle", 0.205)]
 
 
 @pytest.mark.parametrize("name,max_area", PARTS, ids=[p[0] for p in PARTS])
+@pytest.mark.slow
 def test_every_pair_within_eps_of_its_exact_optimum(name, max_area):
     mesh = _example_mesh(name, max_area)
     assert len(mesh.outer_loop) >= 100

@@ -168,6 +168,7 @@ def _twist_placement(twist, centroid, eps):
 
 
 @pytest.mark.parametrize("idx", range(len(CATALOGUE)), ids=[c[0] for c in CATALOGUE])
+@pytest.mark.slow
 def test_theorem1_at_rest(idx):
     """Thm 1: deform closure (the release energy at rest) ⇔ rigid form closure, and the
     energy landscape agrees: E = 0 along the escaping motion, E > 0 around a held part."""
@@ -231,6 +232,7 @@ PAD_GRASPS = {
 
 
 @pytest.mark.parametrize("name", list(PAD_GRASPS))
+@pytest.mark.slow
 def test_check_agrees_with_optimize_for_two_pads(name):
     """SPEC §7: for two pads, check (disc fingers at the pads' places at σ) and optimize
     (pads model) agree on the verdict and on U_A within the stated errors."""
@@ -283,6 +285,7 @@ def _slot_cage(max_area):
     return part, fingers, (W * MM, H * MM, (W - w) * MM)
 
 
+@pytest.mark.slow
 def test_cage_barrier_is_squeezing_through_the_slot():
     """Caged, untouched: the way out is through the slot, and the barrier is the part
     squeezed across its width over its whole length between the slot's flat faces — the
@@ -300,6 +303,7 @@ def test_cage_barrier_is_squeezing_through_the_slot():
     assert rel.path[-1][1] > H + 14 * MM - H / 2           # released above the lid
 
 
+@pytest.mark.slow
 def test_closed_box_is_an_infinite_cage():
     """Four walls around the part, none touching it: it rattles but nothing lets it out
     without pushing a wall deeper than the model allows — U_A is infinite."""
@@ -341,6 +345,7 @@ def _moved(f, R, c, t):
     return PolygonFinger(tuple(move(v) for v in f.vertices))
 
 
+@pytest.mark.slow
 def test_invariant_under_a_rigid_motion_of_part_and_fingers():
     """Thm 2: moving part and fingers together changes neither U_A, its error, the energy
     nor the escape path (relative to the part)."""
@@ -363,6 +368,7 @@ def test_invariant_under_a_rigid_motion_of_part_and_fingers():
     assert np.allclose(d2, d1 @ R.T, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_converges_under_mesh_and_lattice_refinement():
     """U_A of the tapered bar: the changes shrink as the mesh is refined (h halving), and
     lattices of 32 to 72 steps per diameter agree within the stated errors."""
@@ -382,6 +388,7 @@ def test_converges_under_mesh_and_lattice_refinement():
     assert max(r.U_A for r in rels) - min(r.U_A for r in rels) < 0.02 * rels[-1].U_A
 
 
+@pytest.mark.slow
 def test_escape_path_is_continuous_and_ends_released():
     part, mesh, fingers = taper_grasp(0.2)
     rel = release_energy_fingers(mesh, fingers, part=part)
@@ -405,6 +412,7 @@ def test_escape_path_is_continuous_and_ends_released():
 
 # ============================================================================ the kernel
 
+@pytest.mark.slow
 def test_kernel_uniaxial_energy_and_force():
     """Two flat jaws squeezing a rectangle: E = ½ E t H (2d)² / W (plane stress), and the
     generalised force dE/dg matches finite differences."""
@@ -423,6 +431,7 @@ def test_kernel_uniaxial_energy_and_force():
     assert np.allclose(st.forces.sum(axis=0), -st.gradient[:2], rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_kernel_inadmissible_and_free():
     part, mesh, fingers = taper_grasp(0.4)
     pe = PlacementEnergy(mesh, fingers)
@@ -434,6 +443,7 @@ def test_kernel_inadmissible_and_free():
 
 # ============================================================================ the CLI
 
+@pytest.mark.slow
 def test_cli_check_reports_release_energy(tmp_path, capsys):
     from deformclosure.cli.main import main
 

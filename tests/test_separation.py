@@ -341,6 +341,7 @@ def test_curve_and_report(problems):
     assert d["units"]["energy"] == "J" and json.loads(text)["method"] == "exact"
 
 
+@pytest.mark.slow
 def test_exact_needs_far_fewer_evaluations_than_paper():
     # p = 30 perimeter nodes (435 vertices): the paper's method evaluates U_A at every
     # pairwise crossing; ours only where U_A can change.

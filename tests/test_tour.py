@@ -8,6 +8,9 @@ import shutil
 from pathlib import Path
 
 import matplotlib
+import pytest
+
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
 

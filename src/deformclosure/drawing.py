@@ -114,6 +114,16 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
     ------
     PartError
         One line naming the entity or element and what is wrong.
+
+    Examples
+    --------
+    >>> from deformclosure.jsonfile import Source
+    >>> svg = (b'<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="10mm" '
+    ...        b'viewBox="0 0 20 10"><rect width="20" height="10"/>'
+    ...        b'<circle cx="10" cy="5" r="2"/></svg>')
+    >>> d = read_drawing(Source("plate.svg", svg))
+    >>> d.units, len(d.outer), len(d.holes)
+    ('mm', 4, 1)
     """
     src = _source(path)
     _check_options(units, default_units, tolerance)
@@ -651,6 +661,17 @@ def part_from_drawing(path: InputFile, material=None, units: str | None = None,
     Raises
     ------
     PartError
+
+    Examples
+    --------
+    >>> from deformclosure.jsonfile import Source
+    >>> svg = (b'<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="10mm" '
+    ...        b'viewBox="0 0 20 10"><rect width="20" height="10"/>'
+    ...        b'<circle cx="10" cy="5" r="2"/></svg>')
+    >>> part = part_from_drawing(Source("plate.svg", svg), material='{"youngs_modulus": 2e6, '
+    ...     '"poisson_ratio": 0.1, "thickness": 1, "elastic_limit_strain": 0.8}')
+    >>> part.units, len(part.holes), round(part.area * 1e6)      # mm²
+    ('mm', 1, 188)
     """
     from .part import Material, Part, read_material
     from .units import length_scale

@@ -51,7 +51,13 @@ def _finite(value) -> bool:
 
 @dataclass(frozen=True)
 class Pad:
-    """A rigid pad: flat face of width ``width`` (m) with rounded ends of ``radius`` (m)."""
+    """A rigid pad: flat face of width ``width`` (m) with rounded ends of ``radius`` (m).
+
+    Examples
+    --------
+    >>> Pad(width=0.004, radius=0.001).half_span   # W/2 + ρ: the widest point it touches
+    0.003
+    """
 
     width: float
     radius: float
@@ -106,6 +112,12 @@ class GraspAxis:
     The axis is the line ``{p : n·(p − origin) = offset}`` traversed along
     ``a = (cos angle, sin angle)``. ``(angle + π, −offset)`` is the same line with the
     pads' roles exchanged.
+
+    Examples
+    --------
+    >>> ax = GraspAxis.through([0.0, 0.01], [0.012, 0.01])   # across a 12 mm block, m
+    >>> ax.angle, ax.offset
+    (0.0, 0.01)
     """
 
     angle: float

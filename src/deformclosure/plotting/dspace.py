@@ -11,6 +11,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..units import length_scale
+from .mesh import legend_outside
 
 __all__ = ["plot_fingers", "plot_configuration", "plot_slice", "plot_check"]
 
@@ -212,7 +213,7 @@ def plot_check(mesh: Any, result: Any, fingers: Sequence[Any], ax: Any = None, u
             icr = result.centroid + np.array([-tw[1], tw[0]]) / tw[2]
             if np.all(np.abs(icr / s - c) < 3 * L):
                 ax.plot(*(icr / s), "*", color="tab:red", ms=10, zorder=8, label="centre of rotation")
-        ax.legend(fontsize=7, loc="best")
+        legend_outside(ax, fontsize=7)
     verdict = "held (deform closure)" if result.deform_closure else "NOT held (escapes)"
     ax.set_title(f"{verdict}, order {result.order}; U = {result.energy:.3g} J (linear)", fontsize=9)
     ax.set_xlim(bounds[0], bounds[1])

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .mesh import figure_axes, plot_mesh, save_plots
+from .mesh import figure_axes, plot_mesh, save_plots, legend_outside
 
 __all__ = ["plot_quality_curve", "plot_deformed_grasp", "plot_energy_landscape",
            "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots",
@@ -43,7 +43,7 @@ def plot_quality_curve(analysis, ax=None, units: str = "mm"):
     ax.set_xlabel(f"jaw separation σ ({units})")
     ax.set_ylabel("energy (mJ)")
     ax.set_title(f"jaws at nodes {analysis.jaws[0]}, {analysis.jaws[1]} ({sep.method})")
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     return ax.figure
 
 
@@ -89,7 +89,7 @@ def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
     ax.set_title(f"deformed at σ = {sigma * s:.4g} {units}, max strain "
                  f"{strain.max():.3g} (e_L = {mesh.material.elastic_limit_strain:g})"
                  if mesh.material is not None else f"deformed at σ = {sigma * s:.4g} {units}")
-    ax.legend(loc="upper right", fontsize=8)
+    legend_outside(ax)
     return ax.figure
 
 
@@ -135,7 +135,7 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
     ax.set_ylabel(f"jaw 2 arclength ({units})")
     ax.set_aspect("equal")
     ax.set_title(f"energy landscape at σ = {sigma * s:.4g} {units}")
-    ax.legend(fontsize=8, loc="upper left")
+    legend_outside(ax)
     return ax.figure
 
 
@@ -283,7 +283,7 @@ def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
         ax.annotate(f"#{r + 1}", mid, color=f"C{r % 10}", fontsize=8, fontweight="bold",
                     xytext=(3, 3), textcoords="offset points")
     if shown:
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+        legend_outside(ax)
     ax.set_title(f"top {len(shown)} jaw pairs" + ("" if getattr(plan, "allow_pulling", False)
                                                   else " (pulling pairs left out)"))
     return ax.figure

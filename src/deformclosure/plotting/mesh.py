@@ -43,6 +43,13 @@ def save_plots(obj, out_dir: str | Path, units: str, specs) -> list[Path]:
     return paths
 
 
+def legend_outside(ax, **kw):
+    """The axes' legend to the right of the axes, so it never hides the data (saved
+    figures use a tight bounding box, so it stays in the picture)."""
+    kw.setdefault("fontsize", 8)
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kw)
+
+
 def save_figure(fig, path: str | Path) -> None:
     """Save and close ``fig``."""
     import matplotlib.pyplot as plt

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..units import length_scale
 from .grasp import quality_lines, sigma_marks
-from .mesh import figure_axes, save_plots
+from .mesh import figure_axes, save_plots, legend_outside
 
 __all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots"]
 
@@ -53,7 +53,7 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
     ax.set_ylabel("energy (mJ)")
     ax.set_title(f"pads W = {result.pad.width * s:.3g}, ρ = {result.pad.radius * s:.3g} {units}: "
                  f"{result.verdict}")
-    ax.legend(fontsize=8)
+    legend_outside(ax)
     return ax.figure
 
 
@@ -148,7 +148,7 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
     ax.set_ylabel(f"y ({units})")
     ax.set_title("best grasp axes (pads at σ* for the exactly solved ones)")
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+        legend_outside(ax)
     return ax.figure
 
 
