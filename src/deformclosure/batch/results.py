@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import os
 import shlex
@@ -256,7 +255,9 @@ def format_results(rows: Sequence[dict], fmt: str = "table") -> str:
     str
     """
     if fmt == "json":
-        return json.dumps(list(rows), indent=2, allow_nan=False)
+        from ..outputs import json_text
+
+        return json_text(list(rows))
     if fmt == "csv":
         return _csv_text(rows)
     if fmt != "table":

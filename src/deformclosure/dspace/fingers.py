@@ -33,7 +33,6 @@ Parts", IJRR 24(11), 2005, §3.2 (fingers and D-obstacles).
 
 from __future__ import annotations
 
-import json
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -877,5 +876,7 @@ def fingers_to_dict(fingers: Sequence[Finger], units: str = "m") -> dict:
 
 
 def write_fingers(fingers: Sequence[Finger], path: str | Path, units: str = "m") -> None:
-    """Write a finger file (JSON) in ``units``."""
-    Path(path).write_text(json.dumps(fingers_to_dict(fingers, units), indent=2) + "\n")
+    """Write a finger file (JSON) in ``units``, atomically."""
+    from ..outputs import write_json
+
+    write_json(path, fingers_to_dict(fingers, units), "finger file")

@@ -107,12 +107,11 @@ class SliceResult:
 
     def save(self, path: str | Path) -> None:
         """Write ``.npz`` (arrays) or ``.json`` (:meth:`to_dict`), chosen by the suffix."""
-        from ..outputs import atomic_path
+        from ..outputs import atomic_path, write_json
 
         path = Path(path)
         if path.suffix.lower() == ".json":
-            with atomic_path(path) as tmp:
-                tmp.write_text(json.dumps(self.to_dict()) + "\n")
+            write_json(path, self.to_dict(), "slice", indent=None)
             return
         if path.suffix.lower() != ".npz":
             path = path.with_name(path.name + ".npz")      # what numpy would write

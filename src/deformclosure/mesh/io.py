@@ -15,7 +15,6 @@ the loops recovered from the triangles.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -372,11 +371,11 @@ def write_mesh(mesh: Mesh, path: str | Path) -> bool:
     >>> kept        # .vtu stores the material as cell data, .msh cannot
     (True, False)
     """
-    from ..outputs import atomic_path, write_text_atomic
+    from ..outputs import atomic_path, write_json
 
     path = Path(path)
     if path.suffix.lower() == ".json":
-        write_text_atomic(path, json.dumps(mesh_to_dict(mesh)), "mesh")
+        write_json(path, mesh_to_dict(mesh), "mesh", indent=None)
         return mesh.material is not None
     import meshio
 
