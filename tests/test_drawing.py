@@ -223,3 +223,18 @@ def test_drawings_are_accepted_wherever_a_part_file_is(plate, tmp_path, capsys):
     (tmp_path / "plate.material.json").write_text(json.dumps({**RUBBER, "mesh": {"min_angle": 25}}))
     beside = Part.from_file(plate)
     assert beside.material == direct.material and beside.mesh_options.min_angle == 25
+
+
+@pytest.mark.parametrize("width, expected_mm", [("20mm", 20.0), ("2cm", 20.0), ("2in", 50.8),
+                                                 ("144pt", 50.8)])
+def test_svg_physical_width_converts_exactly(width, expected_mm):
+    """svgelements turns mm into px with a 7-digit factor (a 20 mm drawing came out
+    20.0000108 mm); the physical width as written fixes the scale exactly."""
+    from deformclosure.drawing import read_drawing
+    from deformclosure.jsonfile import Source
+
+    svg = (f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="1in" '
+           f'viewBox="0 0 20 10"><rect width="20" height="10"/></svg>').encode()
+    d = read_drawing(Source("plate.svg", svg))
+    assert d.units == "mm"
+    np.testing.assert_allclose(np.ptp(d.outer[:, 0]), expected_mm, rtol=1e-13)

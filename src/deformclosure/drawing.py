@@ -418,7 +418,7 @@ def _svg_pieces(src: Source, units: str | None, layer: str | None,
     if units is not None:
         unit, scale = units, 1.0 / px_per_user
     else:
-        unit, scale = "mm", 25.4 / 96.0
+        unit, scale = "mm", _svg_mm_per_px(svg)
     pieces: list[_Piece] = []
     polylines = []
     for i, shape in enumerate(shapes):
@@ -453,6 +453,21 @@ def _svg_pieces(src: Source, units: str | None, layer: str | None,
             pts = pts * np.array([1.0, -1.0])
             pieces.append(_Piece(pts, closed, label))
     return pieces, unit, scale
+
+
+def _svg_mm_per_px(svg) -> float:
+    """Millimetres per parsed coordinate. With a physical root width and a viewBox, exact
+    from the width as written: svgelements converts mm and cm to px with a 7-digit
+    factor (3.7795296 px/mm), which would make a 20 mm drawing 20.0000108 mm. Otherwise
+    CSS pixels, 25.4/96 mm each."""
+    import re
+
+    vb = getattr(svg, "viewbox", None)
+    raw = str(svg.values.get("width") or "")
+    m = re.fullmatch(r"\s*([0-9.]+(?:[eE][+-]?[0-9]+)?)\s*(mm|cm|in|pt|pc)\s*", raw)
+    if vb is not None and getattr(vb, "width", None) and m and svg.width:
+        return float(m.group(1)) * _SVG_PHYSICAL[m.group(2)] / float(svg.width)
+    return 25.4 / 96.0
 
 
 def _svg_px_per_user(svg) -> float:
