@@ -28,6 +28,7 @@ from typing import Any, Sequence
 
 from ..choices import METHODS, MODELS
 from ..errors import DeformClosureError
+from ..limits import MAX_SLICE_RESOLUTION
 
 __all__ = ["Opt", "OPTIONS", "JOB_COMMANDS", "options_of", "parse_argv", "defaults",
            "key_params"]
@@ -202,7 +203,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("extent", ("--extent",), "str", metavar="XMIN,XMAX,YMIN,YMAX",
             help="Region swept by the node (default: twice its longest edge around it)."),
         Opt("resolution", ("--resolution",), "int", 200, show_default=True,
-            help="Pixels per axis (2..2,000)."),
+            help=f"Pixels per axis (2..{MAX_SLICE_RESOLUTION:,})."),
         Opt("energy", ("--energy",), "choice", "linear", choices=("linear", "corotational"),
             show_default=True, help="Strain energy: linear or corotational."),
         Opt("units", ("--units",), "choice", choices=("m", "cm", "mm", "in"),
