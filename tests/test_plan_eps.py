@@ -150,9 +150,11 @@ def test_plan_plots_mark_pulls_and_keep_legends_off_the_axes(l_shape_plans):
 def test_pair_with_a_numerically_identical_neighbour_is_still_within_eps():
     """On this C-shape mesh the pairs (7, 196) and (7, 195) are mirror images: their
     energy curves agree to rounding and cross, in floating point, just where (7, 196)'s
-    strict span starts; its optimum is the one-sided limit at that jump. Samples near
-    such a crossing may come out not strict: the plan must then solve the pair exactly,
-    or else bound it past the crossing — either way agree with the exact method."""
+    strict span starts; its optimum is (up to rounding) the one-sided limit at that jump,
+    and whether floating point lands on the attained side of the tie depends on the CPU's
+    BLAS kernels. Samples near such a crossing may come out not strict: the plan must then
+    solve the pair exactly, or else bound it past the crossing — either way agree with the
+    exact method, on whichever side of the tie rounding falls."""
     raw = json.loads((ROOT / "examples" / "c_shape.json").read_text())
     raw["mesh"].update(max_area=1.2716604388467365, min_angle=25)
     mesh = dc.mesh_part(dc.Part.from_dict(raw))
@@ -164,7 +166,7 @@ def test_pair_with_a_numerically_identical_neighbour_is_still_within_eps():
     ref = optimize_separation_arrays(model.stiffness.sigma0, model.stiffness.k, g,
                                      g.vertex_index(7, 196), plan.sigma_L[i], method="exact",
                                      n_curve=2)
-    assert ref.quality > 1e-6 and not ref.attained
+    assert ref.quality > 1e-6
     assert plan.settled[i] in ("bounds", "exact")
     assert plan.quality[i] <= ref.quality * (1 + 1e-12) <= plan.quality_upper[i] * (1 + 2e-12)
     assert plan.quality_upper[i] - plan.quality[i] <= eps
