@@ -19,8 +19,10 @@ node ``p``: ``s = a·p``, ``x = n·p - offset``. Pad profile ``d(x)`` is 0 on th
 Candidates are the outer-loop nodes with ``|x| < W/2 + ρ sin 75°`` (contact enforced where
 the surface is within 75° of the face, as the package does). ``zA = zA0 = min(s + d)`` over
 the candidates, ``σ0 = max(s - d) - zA0``. Placement: with lumped nodal areas ``w_i`` and
-their centroid ``c``, ``Σ w_i n·u_i = 0`` and ``Σ w_i (p_i - c) × u_i = 0``; the mean axial
-translation is free. Minimise ``½ uᵀ K u``.
+their centroid ``c``, ``Σ w_i n·u_i = 0`` (the exact mean cross-axis displacement) and the
+area-weighted mean of the rotation field ``ω = ½(∂u_y/∂x − ∂u_x/∂y)`` is zero (SPEC §6; the
+element gradients from the inverse Jacobian of each triangle); the mean axial translation
+is free. Minimise ``½ uᵀ K u``.
 
 Displacements ``u`` are interleaved: ``u[2 i] , u[2 i + 1]`` = x, y of node ``i``.
 """
@@ -94,6 +96,26 @@ def lumped_weights(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     w = np.zeros(len(nodes))
     np.add.at(w, triangles.ravel(), np.repeat(area / 3.0, 3))
     return w
+
+
+def mean_curl_row(nodes: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Row ``r`` (1/m) with ``r·u = Σ_e A_e ω_e / Σ_e A_e``, ``ω = ½(∂u_y/∂x − ∂u_x/∂y)``.
+
+    Hat-function gradients from the inverse Jacobian ``J⁻ᵀ ∇̂N`` of each triangle (the
+    reference gradients ``∇̂N = [[-1, -1], [1, 0], [0, 1]]``)."""
+    r = np.zeros(2 * len(nodes))
+    ref = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+    total = 0.0
+    for t in triangles:
+        P = nodes[t]
+        J = np.column_stack([P[1] - P[0], P[2] - P[0]])
+        A = 0.5 * abs(np.linalg.det(J))
+        grads = ref @ np.linalg.inv(J)          # row a: ∇N_a
+        for a, i in enumerate(t):
+            r[2 * i + 1] += 0.5 * A * grads[a, 0]
+            r[2 * i] -= 0.5 * A * grads[a, 1]
+        total += A
+    return r / total
 
 
 def pad_profile(x: np.ndarray, width: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
@@ -206,9 +228,8 @@ def reference_pad_solution(mesh, angle: float, offset: float, width: float, radi
     w = lumped_weights(nodes, tri)
     c = (w[:, None] * nodes).sum(0) / w.sum()
     wn = w / w.sum()
-    r = (nodes - c) / ell
     Erow1 = np.column_stack([wn * nv[0], wn * nv[1]]).ravel()
-    Erow2 = np.column_stack([-wn * r[:, 1], wn * r[:, 0]]).ravel()  # (r × u) = rx uy - ry ux
+    Erow2 = mean_curl_row(nodes, tri) * ell
     Eq = np.vstack([Erow1, Erow2])
     Eq /= np.linalg.norm(Eq, axis=1, keepdims=True)
     Eq = sp.csr_matrix(Eq)

@@ -215,7 +215,7 @@ def test_matches_full_stiffness_reference(case):
         assert ref["sigma0_nodes"] == pytest.approx(s0n, rel=1e-14)
         U, Ur = float(curve.energy(sigma)), ref["energy"]
         _record("energy vs reference", abs(U - Ur) / Ur)
-        assert U == pytest.approx(Ur, rel=1e-6)
+        assert U == pytest.approx(Ur, rel=1e-9)
 
         fast = [_pad_forces(curve, sigma, p) for p in (0, 1)]
         refd = [dict(zip(map(int, ref[k]["nodes"]), ref[k]["forces"])) for k in ("A", "B")]
@@ -229,11 +229,11 @@ def test_matches_full_stiffness_reference(case):
             for i in set(fast[p]) | set(refd[p]):
                 df = np.linalg.norm(fast[p].get(i, np.zeros(2)) - refd[p].get(i, np.zeros(2)))
                 _record("force vs reference (of largest)", df / fmax_r)
-                assert df <= 1e-6 * fmax_r, (p, i, sigma)
+                assert df <= 1e-9 * fmax_r, (p, i, sigma)
         Fax = curve.axial_force(sigma)
         _record("axial force vs reference", abs(Fax - ref["A"]["axial_force"]) / abs(Fax))
-        assert Fax == pytest.approx(ref["A"]["axial_force"], rel=1e-6)
-        assert Fax == pytest.approx(-ref["B"]["axial_force"], rel=1e-6)
+        assert Fax == pytest.approx(ref["A"]["axial_force"], rel=1e-9)
+        assert Fax == pytest.approx(-ref["B"]["axial_force"], rel=1e-9)
         assert sum(f @ a for f in fast[0].values()) == pytest.approx(Fax, rel=1e-12)
 
         # Displacement: equal up to the part's free axial translation (a constant along a).
@@ -243,8 +243,8 @@ def test_matches_full_stiffness_reference(case):
         shift = diff.mean(0)
         resid = np.abs(diff - shift).max() / umax
         _record("displacement vs reference (of largest)", resid)
-        assert resid <= 1e-6
-        assert abs(shift[0] * a[1] - shift[1] * a[0]) <= 1e-6 * umax
+        assert resid <= 1e-9
+        assert abs(shift[0] * a[1] - shift[1] * a[0]) <= 1e-9 * umax
 
 
 # --------------------------------------------------------------------------- 2. properties

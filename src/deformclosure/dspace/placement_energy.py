@@ -8,8 +8,9 @@ placement has the contact energy of §6 with the fingers as rigid bodies::
     E(g) = min ½ uᵀ K u   subject to  g_r(g) + C_r u ≥ 0  for every contact row r,
 
 where the deformation ``u`` has no rigid part (area-weighted, the placement *is* the rigid
-motion) — the constraint of :class:`deformclosure.pads.contact.PadContact`, whose boundary
-compliance ``Y = Pᵀ Z P`` (one factorisation) is reused. In the dual, with the Delassus
+motion: the gauge of SPEC §7, :meth:`deformclosure.contact.compliance.BoundaryCompliance.placement_gauge`,
+the same functionals as the pads' axis gauge), whose boundary compliance ``Y = Pᵀ Z P``
+(one factorisation) is reused. In the dual, with the Delassus
 matrix ``W = C Y Cᵀ``::
 
     E(g) = max_{λ ≥ 0} −(g₀ᵀ λ + ½ λᵀ W λ) = ½ λᵀ W λ    at the solution,
@@ -815,8 +816,9 @@ class PlacementEnergy:
         The part at rest (m), with its material.
     fingers : sequence of Finger
         Fixed fingers (m), in the frame of the part at rest.
-    solver : PadContact, optional
-        Reuse a factorisation of this mesh (its ``Y`` and centroid).
+    solver : BoundaryCompliance, optional
+        Reuse a factorisation of this mesh (its ``Y`` and centroid); a pads model's
+        :class:`~deformclosure.pads.contact.PadContact` is one.
     centroid : array_like (2,), optional
         Reference point of the rotation (m); default the solver's area centroid. A second
         mesh realisation of the same part must use the first one's.
@@ -838,11 +840,11 @@ class PlacementEnergy:
     def __init__(self, mesh: Any, fingers: Sequence[Finger], *, solver: Any = None,
                  centroid: Any = None, tol: float | None = None,
                  max_depth_ratio: float = MAX_DEPTH_RATIO, disc_axes_: Any = None) -> None:
-        from ..pads.contact import PadContact
+        from ..contact.compliance import BoundaryCompliance
 
         self.mesh = mesh
         self.fingers = tuple(fingers)
-        self.solver = PadContact(mesh) if solver is None else solver
+        self.solver = BoundaryCompliance.placement_gauge(mesh) if solver is None else solver
         self.centroid = np.asarray(self.solver.centroid if centroid is None else centroid, float)
         self.tol = resolve_tolerance(mesh, tol)
         self.diameter = float(mesh.diameter)

@@ -1,17 +1,11 @@
 """Frictionless contact of two rigid pads with an elastic part, on the condensed boundary
 compliance (SPEC §6).
 
-At a fixed grasp axis the part's rotation and its translation across the axis are those
-of the axis — in the area-weighted least-squares sense, ``Σ wᵢ n·uᵢ = 0`` and
-``Σ wᵢ (pᵢ − c) × uᵢ = 0`` with lumped nodal areas ``wᵢ`` and area centroid ``c`` — and it
-floats along the axis. The energy of a load ``f`` on the part so constrained is
-``½ fᵀ Y f`` with the constrained compliance ``Y = Pᵀ Z P``: ``Z`` is the compliance with
-three DOFs pinned (one factorisation of ``K``) and ``P = I − M R (Rᵀ M R)⁻¹ Rᵀ`` moves the
-load's rigid part onto the area-weighted reaction (``R``: rigid modes about ``c``, ``M``:
-nodal areas). Constraining the mean axial translation too is harmless, since the contact
-problem carries the part's axial float as its own unknown ``t``. Only boundary DOFs are
-loaded, so ``Y`` is needed on the boundary only: it follows from the boundary block of
-``Z`` (the condensed compliance) and three extra solves.
+At a fixed grasp axis the part's mean rotation and mean translation are those of the axis
+(the gauge of :class:`deformclosure.contact.compliance.BoundaryCompliance`, SPEC §6) and
+it floats along the axis: the contact problem carries the float ``t`` as its own unknown.
+The energy of a load ``f`` on the part so constrained is ``½ fᵀ Y f`` with the gauged
+boundary compliance ``Y``.
 
 Gaps are measured along the axis to the pad's surface ``d(x)`` (see
 :mod:`deformclosure.pads.geometry`) and linearised in the part's displacement only:
@@ -27,15 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..elasticity.condense import CondensedCompliance
-from ..elasticity.critical_distance import averaging_operator
-from ..elasticity.solve import rigid_modes
-from ..elasticity.stiffness import element_b_matrices, stiffness_matrix
+from ..contact.compliance import BoundaryCompliance
 from ..geometry import touch_tolerance
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 from .homotopy import ContactPath, trace_contact_path
 
-__all__ = ["PadContact", "GraspCurve", "nodal_areas", "hole_containing"]
+__all__ = ["PadContact", "GraspCurve", "hole_containing"]
 
 
 def hole_containing(mesh, point) -> int | None:
@@ -46,13 +37,6 @@ def hole_containing(mesh, point) -> int | None:
         if shapely.contains_xy(shapely.Polygon(mesh.nodes[lp]), float(point[0]), float(point[1])):
             return k
     return None
-
-
-def nodal_areas(mesh) -> np.ndarray:
-    """Lumped nodal areas (m²): one third of each adjacent triangle's area, shape (n,)."""
-    w = np.zeros(mesh.n_nodes)
-    np.add.at(w, mesh.triangles.ravel(), np.repeat(mesh.areas / 3.0, 3))
-    return w
 
 
 @dataclass(frozen=True)
@@ -143,8 +127,9 @@ class GraspCurve:
         return float(lam[on_a] @ (self.normals[on_a] @ self.axis.direction))
 
 
-class PadContact:
-    """One factorisation of a part's stiffness; grasp energies for any axis and pad.
+class PadContact(BoundaryCompliance):
+    """One factorisation of a part's stiffness in the axis gauge of SPEC §6
+    (:meth:`BoundaryCompliance.axis_gauge`); grasp energies for any axis and pad.
 
     It also keeps the mesh's strain data, built on first use: the element
     strain-displacement matrices and the critical-distance averaging operator of each
@@ -158,74 +143,12 @@ class PadContact:
     """
 
     def __init__(self, mesh, K: sp.spmatrix | None = None) -> None:
-        self.mesh = mesh
-        K = stiffness_matrix(mesh) if K is None else K
-        nodes = mesh.nodes
-        self.boundary = mesh.perimeter_nodes
-        self.cc = CondensedCompliance(K, nodes, mesh.triangles, self.boundary)
-        w = nodal_areas(mesh)
-        self.centroid = (w[:, None] * nodes).sum(0) / w.sum()
-        R = rigid_modes(nodes - self.centroid)
-        MR = np.repeat(w, 2)[:, None] * R
-        H = np.linalg.inv(R.T @ MR)
-        ZMR = self.cc.solve(MR)
-        bd = np.column_stack([2 * self.boundary, 2 * self.boundary + 1]).ravel()
-        Rb, ZMRb = R[bd], ZMR[bd]
-        A = Rb @ H
-        # Y_bb = Z_bb − (ZMR)_b H R_bᵀ − R_b H (ZMR)_bᵀ + R_b H (MR)ᵀ Z MR H R_bᵀ
-        T = ZMRb @ A.T
-        Y = self.cc.C - T - T.T + A @ (MR.T @ ZMR) @ A.T
-        self.Y = 0.5 * (Y + Y.T)
-        self._R, self._MR, self._H = R, MR, H
-        self.diameter = mesh.diameter
-        self._ring = nodes[mesh.outer_loop]
-        self._B: np.ndarray | None = None
-        self._averaging: dict[float, sp.csr_matrix] = {}
+        super().__init__(mesh, K)
+        self._ring = mesh.nodes[mesh.outer_loop]
 
-    def element_strains(self, U: np.ndarray) -> np.ndarray:
-        """Engineering element strains ``[exx, eyy, gamma_xy]`` of the displacement
-        columns ``U`` (m), shape ``(2n, k)``, as an array ``(k, m, 3)``.
-
-        The same numbers as :func:`deformclosure.elasticity.strain.element_strains` on each
-        column, with the strain-displacement matrices built once per mesh.
-        """
-        mesh = self.mesh
-        if self._B is None:
-            self._B, _ = element_b_matrices(mesh.nodes, mesh.triangles)
-        tri, n = mesh.triangles, mesh.n_nodes
-
-        def strains(u: np.ndarray) -> np.ndarray:
-            ue = np.asarray(u, float).reshape(n, 2)[tri].reshape(len(tri), 6)
-            return np.einsum("mij,mj->mi", self._B, ue)
-
-        return np.stack([strains(U[:, j]) for j in range(U.shape[1])])
-
-    def averaging_operator(self, ell: float) -> sp.csr_matrix:
-        """The critical-distance averaging operator of this mesh for ``ell`` (m)
-        (:func:`deformclosure.elasticity.critical_distance.averaging_operator`), built
-        once per ``ell``."""
-        W = self._averaging.get(ell)
-        if W is None:
-            W = self._averaging[ell] = averaging_operator(self.mesh, ell)
-        return W
-
-    def load_vector(self, curve: GraspCurve, lam: np.ndarray) -> np.ndarray:
+    def load_vector(self, curve: GraspCurve, lam: np.ndarray) -> np.ndarray:  # type: ignore[override]
         """Global load vector (N), shape (2n,), of multipliers ``lam`` on ``curve``'s contacts."""
-        f = np.zeros(2 * self.mesh.n_nodes)
-        F = lam[:, None] * curve.normals
-        np.add.at(f, 2 * curve.nodes, F[:, 0])
-        np.add.at(f, 2 * curve.nodes + 1, F[:, 1])
-        return f
-
-    def displacement(self, f: np.ndarray) -> np.ndarray:
-        """Displacement ``Y f`` (m) of the axis-constrained part under loads ``f`` (N).
-
-        ``f`` may be ``(2n,)`` or ``(2n, r)``.
-        """
-        R, MR, H = self._R, self._MR, self._H
-        fp = f - MR @ (H @ (R.T @ f))
-        v = self.cc.solve(fp)
-        return v - R @ (H @ (MR.T @ v))
+        return super().load_vector(curve.nodes, lam[:, None] * curve.normals)
 
     def hole_start(self, axis: GraspAxis, hole: int) -> float | None:
         """Expanding grasps: axial coordinate (m) where the pads start in hole ``hole`` —
@@ -282,7 +205,7 @@ class PadContact:
             norm = np.hypot(grad[:, 0], grad[:, 1])
             normals = grad / norm[:, None]
             g0 = np.concatenate([gA[selA], gB[selB]]) / norm
-            W = self._delassus(nodes, normals)
+            W = self.delassus(nodes, normals)
             path = trace_contact_path(W, g0, pad_of / norm, sgn / norm, delta_max, gap_tol=tol)
             if not np.isfinite(path.delta[0]):
                 # A pad grazes the part between boundary nodes (no node within its reach):
@@ -307,15 +230,6 @@ class PadContact:
             gA = np.where(gA >= behind, gA, np.inf)
             gB = np.where(gB >= behind, gB, np.inf)
         return gA, gB
-
-    def _delassus(self, nodes: np.ndarray, normals: np.ndarray) -> np.ndarray:
-        pos = self.cc.position(nodes)
-        dx, dy = 2 * pos, 2 * pos + 1
-        Y = self.Y
-        gx, gy = normals[:, 0], normals[:, 1]
-        W = (np.outer(gx, gx) * Y[np.ix_(dx, dx)] + np.outer(gx, gy) * Y[np.ix_(dx, dy)]
-             + np.outer(gy, gx) * Y[np.ix_(dy, dx)] + np.outer(gy, gy) * Y[np.ix_(dy, dy)])
-        return 0.5 * (W + W.T)
 
     def _penetrations(self, curve: GraspCurve, loop, s, d, slope, inside, touch, tol) -> float:
         """Largest rest gap (m) of an excluded node that the traced path makes penetrate.
