@@ -9,7 +9,8 @@ local minimum of the linear elastic energy ``U = 1/2 X^T K X`` in ``D_free``:
 Model (small-displacement theory, like the paper's ``K``)
 ---------------------------------------------------------
 * ``X`` is the nodal displacement including the rigid motion (``K`` ignores it). The
-  configuration ``q(X)`` applies the *mass-weighted rigid part* of ``X`` as an exact
+  configuration ``q(X)`` applies the *rigid part* of ``X`` (mean displacement and mean
+  rotation ω = ½ curl u, the gauge of SPEC §6/§7) as an exact
   finite rotation + translation and the rest as deformation, so a turning part does
   not swell (a linearised rotation would stretch it).
 * Contact conditions are node-to-surface (:func:`.obstacles.contact_rows`): part nodes
@@ -26,9 +27,9 @@ convex QP is solved *in its dual*, whose size is the number of contact condition
 
     minimise 1/2 lam^T W lam + g~^T lam   s.t.  lam >= 0,  B lam = 0,
 
-with ``W = C G C^T`` the contact compliance (``G``: compliance of the perimeter DOFs by
-static condensation, :class:`deformclosure.elasticity.condense.CondensedCompliance`, one
-factorisation), ``g~`` the gaps at ``X = 0`` and ``B lam = 0`` the force and moment
+with ``W = C Y C^T`` the contact compliance (``Y``: the gauged compliance of the
+perimeter DOFs, :class:`deformclosure.contact.compliance.BoundaryCompliance`, one
+factorisation — the same as the pads' and ``check``'s placements), ``g~`` the gaps at ``X = 0`` and ``B lam = 0`` the force and moment
 balance. The QP is solved with Clarabel (through qpsolvers), *polished* on its active
 set (exact complementarity), and the rigid motion is the smallest one keeping every gap
 non-negative (a trust region of 5 % of the diameter per step lets a squeezed-out part
@@ -94,8 +95,8 @@ class EquilibriumResult:
     q : ndarray (n, 2)
         Equilibrium configuration (m).
     displacement : ndarray (n, 2)
-        ``X`` (m): its elastic part gives the energy; its mass-weighted rigid part is
-        applied exactly in ``q``.
+        ``X`` (m): its elastic part gives the energy; its rigid part (mean displacement
+        and mean rotation) is applied exactly in ``q``.
     rotation : float
         Mean rigid rotation of the part (rad).
     translation : ndarray (2,)
@@ -174,33 +175,6 @@ class EquilibriumResult:
             "active": [bool(a) for a in self.active],
             "units": dict(UNITS),
         }
-
-
-class _Compliance:
-    """Compliance of the perimeter DOFs (static condensation, one factorisation).
-
-    Uses :class:`deformclosure.elasticity.condense.CondensedCompliance`: the Schur
-    complement of ``K`` on the perimeter nodes with 3 DOFs pinned, inverted densely.
-    Every contact condition involves perimeter nodes only, so ``W = C G C^T`` needs no
-    solve with many right-hand sides; one solve per iteration gives the full field.
-    """
-
-    def __init__(self, K: Any, mesh: Any):
-        from ..elasticity.condense import CondensedCompliance
-
-        self.cc = CondensedCompliance(K, np.asarray(mesh.nodes, float), np.asarray(mesh.triangles),
-                                      np.asarray(mesh.perimeter_nodes, dtype=np.int64))
-
-    def block(self, S: np.ndarray) -> np.ndarray:
-        """Compliance ``(2k, 2k)`` (m/N) of the DOFs ``[x, y]`` of perimeter nodes ``S``."""
-        pos = self.cc.position(S)
-        d = np.ravel(np.c_[2 * pos, 2 * pos + 1])
-        G = self.cc.C[np.ix_(d, d)]
-        return 0.5 * (G + G.T)
-
-    def solve(self, f: np.ndarray) -> np.ndarray:
-        """Displacement (m) for a self-equilibrated load ``f (2n,)`` (N), pinned gauge."""
-        return self.cc.solve(f)
 
 
 def _solve_dual(W: np.ndarray, g: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -308,46 +282,32 @@ def _polish(W: np.ndarray, g: np.ndarray, B: np.ndarray, lam: np.ndarray, y: np.
 
 
 class _RigidFit:
-    """Mass-weighted rigid part of a displacement field (consistent CST mass matrix).
+    """The rigid part of a displacement field in the gauge of SPEC §6/§7
+    (:func:`deformclosure.contact.compliance.gauge_functionals`).
 
-    ``coords(X)`` returns ``(tx, ty, L theta)``: the displacement of the area centroid
-    and the mean rotation, i.e. the rigid motion closest to ``X`` in the continuum
-    ``L2`` norm (exact for piecewise-linear fields, so a uniform strain of a symmetric
-    part has zero rotation whatever the mesh).
+    ``coords(X)`` returns ``(tx, ty, L theta)``: the mean displacement (the displacement
+    of the area centroid) and the area-weighted mean rotation ``ω = ½ curl u`` — exact
+    for piecewise-linear fields, so a uniform strain has zero rotation on any mesh, and
+    the same convention as the contact energies of ``check`` and the pads.
     """
 
-    def __init__(self, x0: np.ndarray, triangles: np.ndarray, C0: np.ndarray, L: float):
-        import scipy.sparse as sp
+    def __init__(self, mesh: Any, C0: np.ndarray, L: float):
+        from ..contact.compliance import gauge_functionals
 
-        tri = np.asarray(triangles)
-        p = x0[tri]
-        A = 0.5 * np.abs((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
-                         - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
-        local = (np.ones((3, 3)) + np.eye(3)) / 12.0
-        rows = np.repeat(tri, 3, axis=1).ravel()
-        cols = np.tile(tri, (1, 3)).ravel()
-        vals = (A[:, None, None] * local[None]).ravel()
+        x0 = np.asarray(mesh.nodes, float)
         n = len(x0)
-        self.M = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
         self.x0, self.C0, self.L = x0, C0, L
         self.R0 = np.zeros((2 * n, 3))
         self.R0[0::2, 0] = 1.0
         self.R0[1::2, 1] = 1.0
         self.R0[0::2, 2] = -(x0[:, 1] - C0[1]) / L
         self.R0[1::2, 2] = (x0[:, 0] - C0[0]) / L
-        MR = self._M(self.R0)
-        self.G = self.R0.T @ MR
-
-    def _M(self, V: np.ndarray) -> np.ndarray:
-        """Apply the (2n x 2n) vector mass matrix to columns of ``V (2n, k)``."""
-        out = np.empty_like(V)
-        out[0::2] = self.M @ V[0::2]
-        out[1::2] = self.M @ V[1::2]
-        return out
+        self.Gf = gauge_functionals(mesh)
+        self.G = self.Gf @ self.R0               # diag(1, 1, 1/L) up to rounding
 
     def coords(self, X: np.ndarray) -> np.ndarray:
-        v = np.asarray(X, float).reshape(-1, 1)
-        return np.linalg.solve(self.G, self.R0.T @ self._M(v))[:, 0]
+        v = np.asarray(X, float).reshape(-1)
+        return np.linalg.solve(self.G, self.Gf @ v)
 
     def placed(self, X: np.ndarray, rigid: np.ndarray | None = None) -> np.ndarray:
         """Configuration of displacement ``X``: its rigid part applied as an exact
@@ -498,9 +458,9 @@ class _ContactSolve:
             self.F0 = float(np.abs(K.diagonal()).mean() * L)
         self.bd = BoundaryModel(mesh)
         self.C0 = area_centroid(mesh.triangles, x0)
-        self.fit = _RigidFit(x0, mesh.triangles, self.C0, L)
+        self.fit = _RigidFit(mesh, self.C0, L)
         self.R0 = self.fit.R0  # rigid modes: translations (per m) and rotation (per L rad)
-        self.comp: _Compliance | None = None
+        self.comp: Any = None
         self.rows = contact_rows(self.bd, x0, fingers, radius=0.0)
         self.its = 0
 
@@ -579,10 +539,14 @@ class _ContactSolve:
         """The linearised QP in its dual (scaled by ``F0`` and ``L``), polished: the new
         displacement, the contact forces (N) and the active rows."""
         if self.comp is None:
-            self.comp = _Compliance(self.K, self.mesh)
+            from ..contact.compliance import BoundaryCompliance
+
+            self.comp = BoundaryCompliance.placement_gauge(self.mesh, self.K)
         L, F0 = self.L, self.F0
         S, C = _gap_gradients(rows)
-        W = C @ self.comp.block(S) @ C.T  # contact compliance (m/N)
+        pos = self.comp.position(S)
+        d = np.ravel(np.c_[2 * pos, 2 * pos + 1])
+        W = C @ self.comp.Y[np.ix_(d, d)] @ C.T  # contact compliance (m/N)
         gt = rows.gap - C @ X[S].ravel()  # linearised gaps at X = 0
         Ur, B = _balance_rows(rows, self.x0, self.C0, L)
         Ws, gs = W * F0 / L, gt / L
@@ -591,7 +555,7 @@ class _ContactSolve:
         lam = lam_s * F0
         f = np.zeros(2 * self.n)
         np.add.at(f, np.ravel(np.c_[2 * S, 2 * S + 1]), C.T @ lam)
-        X_el = self.comp.solve(f).reshape(self.n, 2)
+        X_el = self.comp.displacement(f).reshape(self.n, 2)
         # rigid motion: y fixes it on the span of the active rows; on the free
         # directions take the smallest total rigid motion that keeps every gap >= 0
         c_rig = self.fit.coords(X_el) / L  # (tx, ty, L theta) / L
