@@ -53,7 +53,7 @@ def read_results(db_path: str | os.PathLike, status: str | None = None) -> list[
 
 #: Scalar fields of the reports shown by ``results`` (SI units, SPEC §5).
 _SCALARS = ("model", "verdict", "sigma_star", "quality", "U_A", "U_L", "sigma_L",
-            "deform_closure", "order", "energy")
+            "force", "stiffness", "deform_closure", "order", "energy")
 _FIELDS = (*_SCALARS, "n_pairs", "top_a", "top_b", "n_axes", "top_angle", "top_point",
            "top_sigma_star", "top_quality", "n_nodes", "n_triangles")
 _TEXT = frozenset({"model", "verdict"})
@@ -98,7 +98,8 @@ def result_summary(result: dict | None) -> dict:
     ----------
     result : dict or None
         A report of ``optimize`` (``model``, ``verdict``, ``sigma_star``, ``quality``,
-        ``U_A``, ``U_L``, ``sigma_L``), ``check`` (``deform_closure``, ``order``,
+        ``U_A``, ``U_L``, ``sigma_L``; pads also ``force`` (N) and ``stiffness`` (N/m)),
+        ``check`` (``deform_closure``, ``order``,
         ``energy``), ``plan`` (paper: ``n_pairs`` and the best pair: ``top_a``, ``top_b``,
         ``top_sigma_star``, ``top_quality``; pads: ``n_axes`` and the best axis:
         ``top_angle`` (rad), ``top_point`` ("x y", m), ``top_sigma_star``, ``top_quality``)
@@ -143,12 +144,14 @@ def result_summary(result: dict | None) -> dict:
 
 #: Units of the summary fields, as suffixes of the CSV columns.
 _UNITS = {"sigma_star": "m", "quality": "J", "U_A": "J", "U_L": "J", "sigma_L": "m",
+          "force": "N", "stiffness": "N_per_m",
           "energy": "J", "top_sigma_star": "m", "top_quality": "J", "top_angle": "rad"}
 #: Columns of ``results --format csv`` after the row's own columns, in this order (those
 #: present in some row). Lengths in m, energies in J, angles in rad.
 CSV_FIGURES = (
     "model", "verdict", "sigma_star_m", "quality_J", "U_A_J", "U_A_infinite", "U_L_J",
-    "sigma_L_m", "jaw_a", "jaw_b", "jaw_a_x_m", "jaw_a_y_m", "jaw_b_x_m", "jaw_b_y_m",
+    "sigma_L_m", "force_N", "stiffness_N_per_m", "jaw_a", "jaw_b", "jaw_a_x_m", "jaw_a_y_m",
+    "jaw_b_x_m", "jaw_b_y_m",
     "axis_x_m", "axis_y_m", "axis_angle_rad", "deform_closure", "order", "energy_J",
     "n_pairs", "top_a", "top_b", "n_axes", "top_angle_rad", "top_point_x_m", "top_point_y_m",
     "top_jaw_a_x_m", "top_jaw_a_y_m", "top_jaw_b_x_m", "top_jaw_b_y_m", "top_sigma_star_m",
@@ -223,7 +226,8 @@ def _describe(row: dict) -> str:
                 f"Q={g(s.get('top_quality'), ' J')} ({s['n_pairs']} pairs)")
     if "sigma_star" in s or "quality" in s:
         v = f" {s['verdict']}" if s.get("verdict") else ""
-        return f"sigma*={g(s.get('sigma_star'), ' m')} Q={g(s.get('quality'), ' J')}{v}"
+        F = f" F={g(s['force'], ' N')}" if s.get("force") is not None else ""
+        return f"sigma*={g(s.get('sigma_star'), ' m')} Q={g(s.get('quality'), ' J')}{F}{v}"
     if "deform_closure" in s:
         dc = s["deform_closure"]
         return f"deform closure: {'-' if dc is None else 'yes' if dc else 'no'}, order {g(s.get('order'))}"

@@ -126,6 +126,25 @@ class GraspCurve:
         on_a = self.pad_of == 0
         return float(lam[on_a] @ (self.normals[on_a] @ self.axis.direction))
 
+    def axial_stiffness(self, sigma: float) -> float:
+        """Grip stiffness ``dF/dδ`` (N/m) at ``sigma`` (m): how fast the pad force grows
+        with the squeeze ``δ`` (``−dF/dσ`` for a contracting grasp, SPEC §6).
+
+        The force is piecewise linear in ``δ``; at a breakpoint the slope of the piece
+        beyond it (towards more squeeze) is taken, 0 before first touch.
+        """
+        path = self.path
+        if path is None or len(path.delta) < 2:
+            return 0.0
+        delta = self.delta(sigma)
+        if delta < path.delta[0]:
+            return 0.0
+        i = int(path.piece(np.array(delta)))
+        on_a = self.pad_of == 0
+        c = self.normals[on_a] @ self.axis.direction
+        dlam = (path.lam[i + 1] - path.lam[i]) / (path.delta[i + 1] - path.delta[i])
+        return float(dlam[on_a] @ c)
+
 
 class PadContact(BoundaryCompliance):
     """One factorisation of a part's stiffness in the axis gauge of SPEC §6

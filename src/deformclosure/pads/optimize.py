@@ -54,9 +54,16 @@ class PadGraspResult:
         The same relative to the start axis' energy.
     limit : PadLimit
     curve : dict
-        ``{"sigma", "U", "U_A", "U_L", "Q"}`` samples for plotting (J; ``None`` = ∞).
+        ``{"sigma", "U", "U_A", "U_L", "Q", "F"}`` samples for plotting (m, J, N;
+        ``None`` = ∞).
     escape_path : list of GraspAxis
         Minimax escape at σ*, start first (empty if U_A is 0 or ∞).
+    force : float or None
+        The pads' axial force at σ* (N), ``None`` when ``Q ≡ 0`` (SPEC §6 "Grip force");
+        ``curve["F"]`` holds it at every curve σ.
+    stiffness : float or None
+        Grip stiffness ``dF/dδ = −dF/dσ`` (N/m) at σ* (contracting; for an expanding
+        grasp the growth of the force with the opening).
     n_axes : int
         Number of axes whose contact problem was solved.
     """
@@ -82,6 +89,17 @@ class PadGraspResult:
     e_L: float | None = None
     warnings: tuple[str, ...] = ()
     solver: PadContact | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def force(self) -> float | None:
+        """The pads' axial force (N) at σ*, ``None`` when ``Q ≡ 0``."""
+        return None if self.sigma_star is None else self.start_curve.axial_force(self.sigma_star)
+
+    @property
+    def stiffness(self) -> float | None:
+        """Grip stiffness ``−dF/dσ`` (N/m) at σ*, ``None`` when ``Q ≡ 0``."""
+        return (None if self.sigma_star is None
+                else self.start_curve.axial_stiffness(self.sigma_star))
 
     def state_at(self, sigma: float, label: str):
         """Displacement (m) and nodal contact forces (N) of the start axis at separation
@@ -118,6 +136,8 @@ class PadGraspResult:
             "U_A": None if inf else self.U_A,
             "U_A_infinite": inf,
             "U_L": self.U_L,
+            "force": self.force,
+            "stiffness": self.stiffness,
             "verdict": self.verdict,
             "noise_floor": self.noise,
             "noise_floor_relative": self.noise_relative,
@@ -249,7 +269,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     U_sL = float(Us(sigma_L))
     sigma_star, e_star = _optimum(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples, noise)
     sig_n = sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)
-    curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star)
+    curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star,
+                          start_curve.axial_force)
     rel = e_star.release
     path = [grid.axis(v) for v in rel.path] if rel.strict and math.isfinite(rel.U_A) else []
     contacts = np.array([start_curve.touch.contact_a, start_curve.touch.contact_b])
@@ -419,7 +440,9 @@ def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
     return best, ev
 
 
-def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star) -> dict:
+def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star, force) -> dict:
+    """The plotted curve: ``sigma`` (m); ``U``, ``U_A``, ``U_L``, ``Q`` (J); ``F`` (N, the
+    pads' axial force)."""
     sig = np.linspace(sigma_L, sigma0, n)
     if sigma_star is not None:
         sig = np.unique(np.append(sig, sigma_star))
@@ -431,4 +454,6 @@ def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star) -> dic
     def lst(a):
         return [None if not math.isfinite(float(v)) else float(v) for v in a]
 
-    return {"sigma": lst(sig), "U": lst(U), "U_A": lst(UA), "U_L": lst(UL), "Q": lst(Q)}
+    F = [force(float(x)) for x in sig]
+    return {"sigma": lst(sig), "U": lst(U), "U_A": lst(UA), "U_L": lst(UL), "Q": lst(Q),
+            "F": lst(F)}

@@ -117,7 +117,7 @@ class RefinedPadGrasp:
             d["convergence"] = [
                 {"max_area": a, "nodes": r.n_nodes, "sigma_star": r.sigma_star,
                  "quality": r.quality, "U_A": None if math.isinf(r.U_A) else r.U_A,
-                 "sigma0": r.sigma0, "sigma_L": r.sigma_L}
+                 "sigma0": r.sigma0, "sigma_L": r.sigma_L, "force": r.force}
                 for a, r in zip(self.max_areas, self.levels)]
             d["verdict"] = self.verdict
         return d

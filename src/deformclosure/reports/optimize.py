@@ -97,6 +97,8 @@ def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
         ua = "infinite" if np.isinf(fine.U_A) else f"{fine.U_A:.6g} J"
         lines.append(f"sigma* = {fine.sigma_star * s:.6g} {unit}  Q* = {fine.quality:.6g} J  "
                      f"U_A = {ua}  U_L = {fine.U_L:.6g} J  (noise floor {fine.noise:.3g} J)")
+        lines.append(f"grip force at sigma* = {fine.force:.4g} N  "
+                     f"(stiffness {fine.stiffness:.4g} N/m)")
     if "convergence" in data:
         lines.append(f"{'max_area (' + unit + '^2)':>18} {'nodes':>7} "
                      f"{'sigma* (' + unit + ')':>14} {'Q* (J)':>12}")
