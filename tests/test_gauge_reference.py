@@ -368,6 +368,13 @@ def test_gauge_rows_vanish_on_what_they_should():
     sa, sn = (P - cen) @ a, (P - cen) @ n
     uni = (-sa[:, None] * a + 0.3 * sn[:, None] * n).ravel()
     assert np.abs(R @ uni).max() <= 1e-14
+    # Stokes: Σ A_e ω_e = ½ ∮ u·dp over every loop (outer CCW, holes CW), exact for P1.
+    u = np.random.default_rng(5).normal(size=(len(P), 2))
+    circ = 0.0
+    for loop in mesh.loops:
+        i, j = np.asarray(loop), np.roll(np.asarray(loop), -1)
+        circ += 0.5 * np.einsum("ij,ij->", 0.5 * (u[i] + u[j]), P[j] - P[i])
+    assert R[2] @ u.ravel() == pytest.approx(circ / area.sum(), rel=1e-12)
 
 
 # =========================================================================== 1. full QP
@@ -467,6 +474,24 @@ def block_mesh(kind: str, plane: str):
     return mesh.rotated(phi) if phi else mesh
 
 
+def _consistent_loads(mesh, a, n, line_load: float) -> tuple[dict, dict]:
+    """Nodal forces (N) of a uniform pressure ``line_load`` (N/m along the face) on both
+    ends of the block, pushing inwards: ``{node: force}`` for the end at ``s = min`` (pad A)
+    and at ``s = max`` (pad B)."""
+    outer = np.asarray(mesh.loops[0])
+    s = mesh.nodes[outer] @ a
+    out: tuple[dict, dict] = ({}, {})
+    for side, (end, push) in enumerate(((s.min(), a), (s.max(), -a))):
+        face = outer[np.abs(s - end) <= 1e-9 * np.ptp(s)]
+        y = np.sort(mesh.nodes[face] @ n)
+        order = face[np.argsort(mesh.nodes[face] @ n)]
+        seg = np.diff(y)
+        tributary = 0.5 * (np.r_[0.0, seg] + np.r_[seg, 0.0])
+        for i, w in zip(order, tributary):
+            out[side][int(i)] = line_load * w * push
+    return out
+
+
 @lru_cache(maxsize=None)
 def _block_K(kind: str, plane: str):
     return skfem_stiffness(block_mesh(kind, plane))
@@ -505,6 +530,9 @@ def test_uniform_compression_between_wide_flat_pads_is_exact(kind, plane):
                 r = mesh.nodes[i] - offset * n
                 M += r[0] * f[1] - r[1] * f[0]
         note("axis moment / (F W)", abs(M) / (F * W))
+        # ... node by node: pressure × thickness × half of each adjacent face segment.
+        note("nodal forces vs consistent loads (of largest)",
+             _force_difference(_package_forces(curve, sigma), _consistent_loads(mesh, a, n, F / W)))
         # Uniform strain: every averaged strain is the uniaxial tensor.
         e = delta / L
         lateral = nu * e if plane == "stress" else nu / (1 - nu) * e
@@ -516,7 +544,46 @@ def test_uniform_compression_between_wide_flat_pads_is_exact(kind, plane):
         ref = reference(mesh, phi, offset, pad_w, rho, sigma, _block_K(kind, plane))
         note("reference QP: U vs exact", abs(ref.energy - U) / U)
         note("reference QP: F vs exact", abs(ref.axial_force - F) / F)
+        note("reference QP: nodal forces vs consistent loads",
+             _force_difference(ref.forces, _consistent_loads(mesh, a, n, F / W)))
     sigma_L, _, _ = _package_limit(pc, curve, E_LIMIT)
     note("sigma0 - sigma_L vs e_L L", abs((L - sigma_L) - E_LIMIT * L) / (E_LIMIT * L))
+    bad = {k: v for k, v in err.items() if not v <= 1e-12}
+    assert not bad, f"relative errors above 1e-12: {bad}"
+
+
+def test_uniform_compression_through_the_optimize_report(tmp_path):
+    """The same exact solution through the public entry point ``reports.run("optimize")``
+    (a part file meshed by the package, with its twin mesh and noise floor): the report's
+    ``sigma_L`` and its energy curve ``curve.U`` at every ``curve.sigma``."""
+    import json
+
+    from deformclosure import reports
+
+    nu, t, W, L = 0.3, 1.0 * MM, BLOCK_W * MM, BLOCK_L * MM
+    Ep = E_MOD / (1 - nu**2)                                       # plane strain
+    part = {"name": "block", "units": "mm", "holes": [],
+            "outer": [[0, 0], [BLOCK_L, 0], [BLOCK_L, BLOCK_W], [0, BLOCK_W]],
+            "material": {"youngs_modulus": E_MOD, "poisson_ratio": nu, "thickness": 1.0,
+                         "elastic_limit_strain": E_LIMIT, "plane": "strain",
+                         "critical_distance": 1.0},
+            "mesh": {"max_area": 1.5, "min_angle": 28, "points": [[3.3, 2.1], [9.7, 5.9]]}}
+    path = tmp_path / "block.json"
+    path.write_text(json.dumps(part))
+    rep = reports.run("optimize", str(path), {
+        "axis": f"{BLOCK_L / 2},{BLOCK_W / 2},0", "pad_radius": 0.5, "pad_width": 1.5 * BLOCK_W,
+        "grid_angles": 4, "grid_offsets": 4})
+    d = rep.data
+    err = {"sigma0": abs(d["sigma0"] - L) / L,
+           "sigma0 - sigma_L": abs((L - d["sigma_L"]) - E_LIMIT * L) / (E_LIMIT * L)}
+    sig = np.asarray(d["curve"]["sigma"])
+    U = np.asarray(d["curve"]["U"])
+    exact = 0.5 * Ep * t * W * (L - sig) ** 2 / L
+    err["curve U (of largest)"] = float(np.abs(U - exact).max() / exact.max())
+    if "F" in d["curve"]:
+        F = Ep * t * W * (L - sig) / L
+        err["curve F (of largest)"] = float(np.abs(np.asarray(d["curve"]["F"]) - F).max() / F.max())
+    for k, v in err.items():
+        _record("optimize report: " + k, v)
     bad = {k: v for k, v in err.items() if not v <= 1e-12}
     assert not bad, f"relative errors above 1e-12: {bad}"
