@@ -39,7 +39,7 @@ LAYERS: dict[str, int] = {
     "errors": 0, "choices": 0, "geometry": 0, "units": 0, "jsonfile": 0, "outputs": 0, "log": 0,
     "part": 1, "drawing": 1, "mesh": 1,
     "elasticity": 2,
-    "contact": 3,
+    "contact": 3, "landscape": 3,
     "grasp": 3, "dspace": 3, "pads": 3, "fields": 3, "limits": 3,
     "planning": 4, "planning.plan": 4, "planning._kernels": 4, "plotting": 4,
     "reports": 5, "batch": 5, "planning.batch": 5,

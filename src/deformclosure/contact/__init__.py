@@ -1,5 +1,6 @@
 """Contact mechanics shared by every model (SPEC §6, §7): the boundary compliance of a
-free part in one gauge.
+free part in one gauge (:mod:`.compliance`) and one entry point for the frictionless
+contact problem (:mod:`.solve`: pivoting LCP, balanced dual QP, exact squeeze path).
 
 The pads on a grasp axis (:mod:`deformclosure.pads`) and a part placed among fixed
 fingers (:mod:`deformclosure.dspace`) solve the same frictionless contact problem on the
@@ -7,5 +8,8 @@ same gauged compliance; they differ only in their coordinates.
 """
 
 from .compliance import BoundaryCompliance, gauge_functionals, mean_rotation_row, nodal_areas
+from .path import ContactPath
+from .solve import ContactProblem, ContactSolution, solve_contact, trace_contact
 
-__all__ = ["BoundaryCompliance", "gauge_functionals", "mean_rotation_row", "nodal_areas"]
+__all__ = ["BoundaryCompliance", "gauge_functionals", "mean_rotation_row", "nodal_areas",
+           "ContactPath", "ContactProblem", "ContactSolution", "solve_contact", "trace_contact"]

@@ -60,6 +60,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..contact.solve import ContactProblem, solve_contact
 from ..errors import DeformClosureError
 from ..elasticity.strain import strain_magnitude
 from .fingers import Finger, as_fingers
@@ -177,27 +178,6 @@ class EquilibriumResult:
         }
 
 
-def _solve_dual(W: np.ndarray, g: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Clarabel on ``min 1/2 l^T W l + g^T l, l >= 0, B l = 0``; returns ``(l, y)``."""
-    import scipy.sparse as sp
-    from qpsolvers import Problem, solve_problem
-
-    r = len(g)
-    P = sp.csc_matrix(0.5 * (W + W.T) + 1e-14 * np.trace(W) / max(r, 1) * np.eye(r))
-    prob = Problem(P, g, -sp.eye(r, format="csc"), np.zeros(r), sp.csc_matrix(B) if len(B) else None,
-                   np.zeros(len(B)) if len(B) else None)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        sol = solve_problem(prob, solver="clarabel", tol_gap_abs=1e-11, tol_gap_rel=1e-11, tol_feas=1e-11,
-                            max_iter=200)
-    if sol.x is None or not np.all(np.isfinite(sol.x)):
-        raise DeformClosureError("the contact problem could not be solved (Clarabel failed); "
-                                 "check the finger placement")
-    lam = np.maximum(np.asarray(sol.x), 0.0)
-    y = np.asarray(sol.y) if sol.y is not None and len(B) else np.zeros(len(B))
-    return lam, y
-
-
 def _min_norm_rigid(y0: np.ndarray, N: np.ndarray, Mi: np.ndarray, zi: np.ndarray,
                     slack: float = 1e-10) -> np.ndarray:
     """``min |y0 + N eta|`` subject to ``zi + Mi (y0 + N eta) >= 0`` (a tiny QP).
@@ -234,51 +214,6 @@ def _min_norm_rigid(y0: np.ndarray, N: np.ndarray, Mi: np.ndarray, zi: np.ndarra
         if np.all(h + MN @ eta2 >= -slack):
             eta = eta2
     return y0 + N @ eta
-
-
-def _polish(W: np.ndarray, g: np.ndarray, B: np.ndarray, lam: np.ndarray, y: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Exact complementarity on the active set of a dual QP solution.
-
-    Rows are active where the multiplier exceeds the slack (interior-point solutions
-    separate the two). The equality-constrained KKT system on the active set is solved
-    by least squares; rows with a negative multiplier are released one at a time.
-
-    Returns
-    -------
-    lam, y : the polished multipliers,
-    N : basis of the rigid multipliers that leave every active gap unchanged,
-    active : bool mask of the active rows.
-    """
-    r, m = len(g), len(B)
-    slack = W @ lam + g + (B.T @ y if m else 0.0)
-    active = lam > np.maximum(slack, 1e-13)
-    lam_p = np.zeros(r)
-    y_p = np.zeros(m)
-    for _ in range(r + 1):
-        A = np.flatnonzero(active)
-        lam_p = np.zeros(r)
-        if len(A) == 0:
-            y_p = np.zeros(m)
-            break
-        KKT = np.block([[W[np.ix_(A, A)], B[:, A].T], [B[:, A], np.zeros((m, m))]])
-        rhs = np.r_[-g[A], np.zeros(m)]
-        sol = np.linalg.lstsq(KKT, rhs, rcond=1e-13)[0]
-        lam_p[A] = sol[: len(A)]
-        y_p = sol[len(A):]
-        worst = int(np.argmin(lam_p[A]))
-        if lam_p[A][worst] >= -1e-13:
-            lam_p = np.maximum(lam_p, 0.0)
-            break
-        active[A[worst]] = False
-    A = np.flatnonzero(active)
-    if m and len(A):
-        _, S, Vt = np.linalg.svd(B[:, A].T, full_matrices=True)
-        rank = int(np.sum(S > 1e-10 * max(S.max(initial=0.0), 1e-300)))
-        N = Vt[rank:].T
-    else:
-        N = np.eye(m)
-    return lam_p, y_p, N, active
 
 
 class _RigidFit:
@@ -550,8 +485,8 @@ class _ContactSolve:
         gt = rows.gap - C @ X[S].ravel()  # linearised gaps at X = 0
         Ur, B = _balance_rows(rows, self.x0, self.C0, L)
         Ws, gs = W * F0 / L, gt / L
-        lam_s, y = _solve_dual(Ws, gs, B)
-        lam_s, y, N, act = _polish(Ws, gs, B, lam_s, y)
+        sol = solve_contact(ContactProblem(Ws, gs, balance=B))
+        lam_s, y, N, act = sol.lam, sol.y, sol.free_balance, sol.active
         lam = lam_s * F0
         f = np.zeros(2 * self.n)
         np.add.at(f, np.ravel(np.c_[2 * S, 2 * S + 1]), C.T @ lam)

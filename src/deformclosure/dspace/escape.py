@@ -644,13 +644,14 @@ def _minimise(pe: PlacementEnergy, g0: np.ndarray, h: float, h_phi: float) -> np
 
 def _strain(pe: PlacementEnergy, state: PlacementState, operator) -> float:
     from ..elasticity.critical_distance import averaged_strains
-    from ..elasticity.strain import element_strains, principal_strains
+    from ..elasticity.strain import element_strains
+    from ..landscape.limit import strain_measure
 
     if len(state.forces) == 0:
         return 0.0
     u = pe.displacement(state)
     e = averaged_strains(pe.mesh, element_strains(pe.mesh, u), None, operator=operator)
-    return float(np.abs(principal_strains(e)).max())
+    return float(strain_measure(e).max())
 
 
 def release_energy_fingers(mesh: Any, fingers: Sequence[Finger], *, part: Any = None, solver: Any = None,
@@ -927,8 +928,8 @@ def _elastic_limit(mesh: Any, pe: PlacementEnergy, land: PlacementLandscape, sta
                    path: list, saddle: int | None, Es: float) -> tuple:
     """Critical distance ``ℓ`` (m), averaged strains at the equilibrium and the saddle,
     ``e_L`` and ``U_L`` (J): the elastic limit over the critical distance."""
-    from ..elasticity.critical_distance import averaging_operator
-    from ..pads.limit import critical_distance_of
+    from ..elasticity.critical_distance import averaging_operator, critical_distance_of
+    from ..landscape.limit import energy_to_limit_from_rest
 
     ell = critical_distance_of(mesh)
     op = averaging_operator(mesh, ell)
@@ -936,10 +937,8 @@ def _elastic_limit(mesh: Any, pe: PlacementEnergy, land: PlacementLandscape, sta
     e_sad = _strain(pe, land.state(path[saddle]), op) if saddle is not None else None
     mat = getattr(mesh, "material", None)
     e_L = None if mat is None else float(mat.elastic_limit_strain)
-    if e_L is None or Es == 0.0 or e_star == 0.0:
-        U_L = math.inf
-    else:
-        U_L = max(Es * ((e_L / e_star) ** 2 - 1.0), 0.0)
+    # the one elastic-limit rule: the state loaded proportionally from rest
+    U_L = math.inf if e_L is None else energy_to_limit_from_rest(Es, e_star, e_L)
     return ell, e_star, e_sad, e_L, U_L
 
 

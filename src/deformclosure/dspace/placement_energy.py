@@ -16,7 +16,8 @@ matrix ``W = C Y Cᵀ``::
     E(g) = max_{λ ≥ 0} −(g₀ᵀ λ + ½ λᵀ W λ) = ½ λᵀ W λ    at the solution,
 
 a small linear complementarity problem solved per placement by block principal pivoting
-(Júdice & Pires), compiled with numba and warm-started from a neighbour's active set.
+(Júdice & Pires; the compiled kernel of :mod:`deformclosure.contact.lcp`, called from
+this module's compiled placement solve) and warm-started from a neighbour's active set.
 
 Contact rows are built in the part frame, at rest (small-displacement theory), from the
 fingers moved by ``g⁻¹``:
@@ -77,6 +78,7 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
+from ..contact.lcp import _lcp
 from .fingers import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
 from .placement import MAX_DEPTH_RATIO
@@ -436,78 +438,6 @@ def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, 
 
 
 # ----------------------------------------------------------------------------- LCP
-
-
-@njit(cache=True, nogil=True)
-def _lcp(W, q, free0):  # pragma: no cover - compiled
-    """Block principal pivoting for ``λ ≥ 0, w = Wλ + q ≥ 0, λᵀw = 0`` (W SPD).
-
-    ``free0``: initial guess of the rows with ``λ > 0`` (warm start). Returns
-    ``(λ, ok)``.
-    """
-    n = q.shape[0]
-    free = free0.copy()
-    lam = np.zeros(n)
-    qs = 1e-300
-    for i in range(n):
-        qs = max(qs, abs(q[i]))
-    ninf_best = n + 1
-    backup = 3
-    for _ in range(10 * n + 50):
-        m = 0
-        for i in range(n):
-            if free[i]:
-                m += 1
-        idx = np.empty(m, np.int64)
-        k = 0
-        for i in range(n):
-            if free[i]:
-                idx[k] = i
-                k += 1
-        lam[:] = 0.0
-        if m > 0:
-            A = np.empty((m, m))
-            b = np.empty(m)
-            for a in range(m):
-                for cc in range(m):
-                    A[a, cc] = W[idx[a], idx[cc]]
-                b[a] = -q[idx[a]]
-            sol = np.linalg.solve(A, b)
-            for a in range(m):
-                lam[idx[a]] = sol[a]
-        w = W @ lam + q
-        ls = 1e-300
-        for i in range(n):
-            ls = max(ls, abs(lam[i]))
-        ninf = 0
-        last = -1
-        for i in range(n):
-            bad = (free[i] and lam[i] < -1e-12 * ls) or ((not free[i]) and w[i] < -1e-12 * qs)
-            if bad:
-                ninf += 1
-                last = i
-        if ninf == 0:
-            for i in range(n):
-                lam[i] = max(lam[i], 0.0)
-            return lam, True
-        if ninf < ninf_best:
-            ninf_best = ninf
-            backup = 3
-            full = True
-        elif backup > 0:
-            backup -= 1
-            full = True
-        else:
-            full = False
-        if full:
-            for i in range(n):
-                if (free[i] and lam[i] < -1e-12 * ls) or ((not free[i]) and w[i] < -1e-12 * qs):
-                    free[i] = not free[i]
-        else:
-            free[last] = not free[last]       # Murty's single pivot: finite termination
-    for i in range(n):
-        lam[i] = max(lam[i], 0.0)
-    return lam, False
 
 
 @njit(cache=True, nogil=True)

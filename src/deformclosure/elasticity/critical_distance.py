@@ -32,6 +32,7 @@ from .strain import principal_strains
 
 __all__ = [
     "default_critical_distance",
+    "critical_distance_of",
     "averaging_operator",
     "averaged_strains",
     "averaged_strain_magnitude",
@@ -39,6 +40,15 @@ __all__ = [
 
 #: Default critical distance as a fraction of the part's diameter (SPEC §6).
 DEFAULT_CRITICAL_FRACTION = 0.02
+
+
+def critical_distance_of(mesh) -> float:
+    """The critical distance ``ℓ`` (m) of a mesh's material: its ``critical_distance``,
+    else :func:`default_critical_distance` of the mesh's diameter (SPEC §6). The one
+    home of the default, for every model."""
+    mat = getattr(mesh, "material", None)
+    cd = getattr(mat, "critical_distance", None) if mat is not None else None
+    return default_critical_distance(mesh.diameter) if cd is None else float(cd)
 
 
 def _check_ell(ell: float) -> float:

@@ -33,7 +33,9 @@ def elastic_limit_separation(sigma0: float | np.ndarray, e_max: float | np.ndarr
                              ) -> float | np.ndarray:
     """``σ_L`` (m): the jaw separation at which the largest strain reaches ``e_L`` (SPEC §4).
 
-    The one implementation of the formula, for one jaw pair (floats) or many (arrays):
+    The closed form of the one elastic-limit rule (:mod:`deformclosure.landscape.limit`)
+    on the paper's loading path — one linear piece from rest, element strains (ℓ = 0) —
+    for one jaw pair (floats) or many (arrays):
     the distance changes by ``e_L / e_max`` before the elastic limit, so
     ``σ_L = max(0, σ0 − e_L/e_max)`` (contracting) or ``σ0 + e_L/e_max`` (expanding).
 

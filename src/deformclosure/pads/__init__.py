@@ -1,8 +1,8 @@
 """Physical jaws (SPEC §6): rigid pads, grasp axes, frictionless contact, converged quality.
 
 Pipeline: :mod:`.geometry` (pads, axes, first touch) → :mod:`.contact` (the contact
-problem of one axis on the condensed compliance, traced exactly in σ by
-:mod:`.homotopy`) → :mod:`.limit` (elastic limit over the critical distance) →
+problem of one axis on the gauged boundary compliance of :mod:`deformclosure.contact`,
+traced exactly in σ by :func:`deformclosure.contact.solve.trace_contact`) → :mod:`.limit` (elastic limit over the critical distance) →
 :mod:`.landscape` (release over axes) and :mod:`.noise` (what the mesh resolves) →
 :mod:`.optimize` (σ*) → :mod:`.refine` (convergence, error, verdict) → :mod:`.plan`.
 """

@@ -22,9 +22,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..contact.compliance import BoundaryCompliance
+from ..contact.path import ContactPath
+from ..contact.solve import ContactProblem, trace_contact
 from ..geometry import touch_tolerance
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
-from .homotopy import ContactPath, trace_contact_path
 
 __all__ = ["PadContact", "GraspCurve", "hole_containing"]
 
@@ -225,7 +226,9 @@ class PadContact(BoundaryCompliance):
             normals = grad / norm[:, None]
             g0 = np.concatenate([gA[selA], gB[selB]]) / norm
             W = self.delassus(nodes, normals)
-            path = trace_contact_path(W, g0, pad_of / norm, sgn / norm, delta_max, gap_tol=tol)
+            problem = ContactProblem(W, g0, balance=(sgn / norm)[None, :], rate=pad_of / norm,
+                                     normals=normals)
+            path = trace_contact(problem, delta_max, gap_tol=tol)
             if not np.isfinite(path.delta[0]):
                 # A pad grazes the part between boundary nodes (no node within its reach):
                 # nothing to squeeze on this mesh.

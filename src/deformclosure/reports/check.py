@@ -112,7 +112,7 @@ def _writer(rep: Report, report: bool) -> list[str]:
     p, written = rep.params, []
     if p["export_fields"]:
         from ..fields import FieldState, write_fields
-        from ..pads.limit import critical_distance_of
+        from ..elasticity.critical_distance import critical_distance_of
 
         eq = res.equilibrium
         state = FieldState("equilibrium", np.asarray(eq.q) - inp.mesh.nodes, eq.nodal_forces,

@@ -229,7 +229,7 @@ def _paper_writer(inp, jaws, model):
                 model.stiffness.sigma0, model.stiffness.k, pulls=model.pulls), "graph", indent=None)
         if p["export_fields"]:
             from ..fields import write_fields
-            from ..pads.limit import critical_distance_of
+            from ..elasticity.critical_distance import critical_distance_of
 
             sigmas = ([("sigma_star", res.sigma_star)] if res.sigma_star is not None else []) \
                 + [("sigma_L", res.limit.sigma_L)]

@@ -1,0 +1,110 @@
+"""The one contact solver entry (``contact.solve``): each method against brute force.
+
+Independent reference: for a small problem, every active set ``A`` is tried — solve the
+equality KKT system on ``A`` (with the balance rows) and keep the one whose multipliers
+are ``≥ 0`` and whose gaps are ``≥ 0`` off ``A``. For an SPD ``W`` the solution of the
+complementarity problem is unique, so every method must find it. The exact squeeze path
+must equal the one-configuration solve at every squeeze.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from deformclosure.contact import ContactProblem, solve_contact, trace_contact
+from deformclosure.contact.lcp import solve_lcp
+from deformclosure.contact.qp import solve_balanced_dual
+
+
+def _brute_force(W, q, B):
+    r, m = len(q), len(B)
+    for k in range(r + 1):
+        for A in itertools.combinations(range(r), k):
+            A = list(A)
+            KKT = np.block([[W[np.ix_(A, A)], B[:, A].T], [B[:, A], np.zeros((m, m))]]) \
+                if m else W[np.ix_(A, A)]
+            rhs = np.r_[-q[A], np.zeros(m)]
+            try:
+                sol = np.linalg.solve(KKT, rhs) if len(rhs) else np.zeros(0)
+            except np.linalg.LinAlgError:
+                continue
+            lam = np.zeros(r)
+            lam[A] = sol[:k]
+            y = sol[k:]
+            g = q + W @ lam + (B.T @ y if m else 0.0)
+            scale = max(np.abs(q).max(), 1e-300)
+            if np.all(lam >= -1e-10 * max(np.abs(lam).max(), 1.0)) and np.all(g >= -1e-10 * scale):
+                return lam, y
+    raise AssertionError("no active set solves the problem")
+
+
+def _spd(rng, r):
+    A = rng.normal(size=(r, r))
+    return A @ A.T + 0.3 * np.eye(r)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 6), st.integers(0, 2**31 - 1))
+def test_pivoting_lcp_matches_brute_force(r, seed):
+    rng = np.random.default_rng(seed)
+    W, q = _spd(rng, r), rng.normal(size=r)
+    lam_ref, _ = _brute_force(W, q, np.zeros((0, r)))
+    lam, ok = solve_lcp(W, q)
+    assert ok
+    assert np.allclose(lam, lam_ref, atol=1e-9 * max(1.0, np.abs(lam_ref).max()))
+    sol = solve_contact(ContactProblem(W, q))
+    assert np.allclose(sol.lam, lam_ref, atol=1e-9 * max(1.0, np.abs(lam_ref).max()))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 6), st.integers(0, 2**31 - 1))
+def test_balanced_dual_matches_brute_force(r, seed):
+    """With one balance row of mixed signs (two opposed bodies, like two pads)."""
+    rng = np.random.default_rng(seed)
+    W = _spd(rng, r)
+    e = np.where(np.arange(r) < r // 2, 1.0, -1.0) * rng.uniform(0.5, 1.5, r)
+    q = rng.normal(size=r) - 0.5
+    B = e[None, :]
+    lam_ref, y_ref = _brute_force(W, q, B)
+    lam, y, _, active = solve_balanced_dual(W, q, B)
+    tol = 1e-7 * max(1.0, np.abs(lam_ref).max())
+    assert np.allclose(lam, lam_ref, atol=tol)
+    if np.any(lam_ref > tol):
+        assert np.allclose(y, y_ref, atol=1e-6 * max(1.0, np.abs(y_ref).max()))
+    sol = solve_contact(ContactProblem(W, q, balance=B))
+    assert np.allclose(sol.lam, lam_ref, atol=tol)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(2, 7), st.integers(0, 2**31 - 1))
+def test_squeeze_path_equals_the_solve_at_each_squeeze(r, seed):
+    """``trace_contact`` (parametric active set) against ``solve_contact`` (dual QP) at
+    squeezes along the path: two rigid bodies (rows of A: e > 0, b = 0; rows of B:
+    e < 0, b > 0) closing on a compliant part."""
+    rng = np.random.default_rng(seed)
+    nA = max(1, r // 2)
+    W = _spd(rng, r) * 1e-3
+    onB = np.arange(r) >= nA
+    e = np.where(onB, -1.0, 1.0)
+    b = np.where(onB, 1.0, 0.0)
+    g0 = rng.uniform(0.0, 1e-3, r)
+    problem = ContactProblem(W, g0, balance=e[None, :], rate=b)
+    path = trace_contact(problem, 5e-3, gap_tol=1e-15)
+    for delta in np.linspace(path.delta[0], 5e-3, 9)[1:]:
+        lam_path = path.multipliers(float(delta))
+        lam_ref, _ = _brute_force(W, g0 - delta * b, e[None, :])
+        assert np.allclose(lam_path, lam_ref, atol=1e-8 * max(1.0, np.abs(lam_ref).max()))
+        E = 0.5 * lam_ref @ W @ lam_ref
+        assert path.energy_at(float(delta)) == pytest.approx(E, rel=1e-9, abs=1e-300)
+
+
+def test_rows_carry_tangents_for_friction():
+    n = np.array([[1.0, 0.0], [0.6, 0.8]])
+    t = ContactProblem(np.eye(2), np.zeros(2), normals=n).tangents()
+    assert np.allclose(np.einsum("ij,ij->i", n, t), 0.0)
+    assert np.allclose(np.linalg.norm(t, axis=1), 1.0)
+    assert np.allclose(n[:, 0] * t[:, 1] - n[:, 1] * t[:, 0], 1.0)   # counter-clockwise
