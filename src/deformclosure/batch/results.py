@@ -55,8 +55,8 @@ def read_results(db_path: str | os.PathLike, status: str | None = None) -> list[
 _SCALARS = ("model", "verdict", "sigma_star", "quality", "U_A", "U_L", "sigma_L",
             "force", "stiffness", "deform_closure", "order", "energy")
 _FIELDS = (*_SCALARS, "n_pairs", "top_a", "top_b", "n_axes", "top_angle", "top_point",
-           "top_sigma_star", "top_quality", "n_nodes", "n_triangles")
-_TEXT = frozenset({"model", "verdict"})
+           "top_sigma_star", "top_quality", "top_verdict", "n_nodes", "n_triangles")
+_TEXT = frozenset({"model", "verdict", "top_verdict"})
 _BOOL = frozenset({"deform_closure"})
 _INT = frozenset({"order"})
 
@@ -116,13 +116,16 @@ def result_summary(result: dict | None) -> dict:
     out = {k: _typed(k, result[k]) for k in _SCALARS
            if k in result and not isinstance(result[k], (dict, list))}
     axes = result.get("axes")
-    if isinstance(axes, list):                   # a pad plan: grasp axes, best first
+    if isinstance(axes, list):                   # a pad plan: grasp axes, verified first
         out["n_axes"] = len(axes)
-        if axes and isinstance(axes[0], dict):
-            top = axes[0]
+        # only a verified row is a result; a screened one is a candidate (SPEC §6 "Plan")
+        verified = [a for a in axes if isinstance(a, dict) and a.get("verified") is True]
+        if verified:
+            top = verified[0]
             out.update(top_angle=_typed("angle", top.get("angle")),
                        top_sigma_star=_typed("sigma_star", top.get("sigma_star")),
-                       top_quality=_typed("quality", top.get("quality")))
+                       top_quality=_typed("quality", top.get("quality")),
+                       top_verdict=_typed("verdict", top.get("verdict")))
             point = _xy(top.get("point"))
             if point is not None:
                 out["top_point"] = " ".join(f"{v:.6g}" for v in point)
@@ -155,7 +158,7 @@ CSV_FIGURES = (
     "axis_x_m", "axis_y_m", "axis_angle_rad", "deform_closure", "order", "energy_J",
     "n_pairs", "top_a", "top_b", "n_axes", "top_angle_rad", "top_point_x_m", "top_point_y_m",
     "top_jaw_a_x_m", "top_jaw_a_y_m", "top_jaw_b_x_m", "top_jaw_b_y_m", "top_sigma_star_m",
-    "top_quality_J", "n_nodes", "n_triangles")
+    "top_quality_J", "top_verdict", "n_nodes", "n_triangles")
 #: The row's own columns in the CSV: times ISO 8601 UTC, run time in s.
 CSV_COLUMNS = ("key", "part", "command", "options", "status", "error", "started_utc",
                "finished_utc", "seconds_s", "version")
@@ -193,6 +196,8 @@ def _csv_figures(result: Any) -> dict:
         best = result.get(kind)
         if kind == "pairs" and isinstance(result.get("top"), list) and result["top"]:
             best = result["top"]                        # paper plans: pulling pairs excluded
+        if kind == "axes" and isinstance(best, list):   # pad plans: verified rows only
+            best = [a for a in best if isinstance(a, dict) and a.get("verified") is True]
         if isinstance(best, list) and best and isinstance(best[0], dict):
             top = best[0]
             point = _xy(top.get("point"))
@@ -216,9 +221,9 @@ def _describe(row: dict) -> str:
     if "n_axes" in s:
         if s.get("top_angle") is None:
             return f"{s['n_axes']} axes"
-        return (f"best axis {math.degrees(s['top_angle']):.1f} deg through ({s.get('top_point')}) m "
-                f"sigma*={g(s.get('top_sigma_star'), ' m')} Q={g(s.get('top_quality'), ' J')} "
-                f"({s['n_axes']} axes)")
+        return (f"best verified axis {math.degrees(s['top_angle']):.1f} deg through "
+                f"({s.get('top_point')}) m sigma*={g(s.get('top_sigma_star'), ' m')} "
+                f"Q={g(s.get('top_quality'), ' J')} {s.get('top_verdict')} ({s['n_axes']} axes)")
     if "top_quality" in s or "n_pairs" in s:
         if "top_a" not in s:
             return f"{s['n_pairs']} pairs"

@@ -5,8 +5,13 @@ curve in σ; on a shared lattice of separations the release energies of *all* ax
 from one union–find sweep per σ (the landscape is the same for every start axis). Axes
 that are never a strict minimum beyond the noise floor cannot hold at any σ; for the
 others the elastic limit is computed (critical-distance strain) and ``Q = min(U_A, U_L)``
-is maximised on the lattice. The best ``top`` axes are then solved exactly with
-:func:`~deformclosure.pads.optimize.optimize_pads` on a grid anchored at each of them.
+is maximised on the lattice. A screened row is a *candidate*, never "held" (SPEC §6
+"Plan"): the lattice reads the barrier off one coarse mesh and grid. The best ``verify``
+candidates are then verified with the code path of ``optimize``
+(:func:`~deformclosure.pads.refine.pad_grasp`: a landscape anchored at the axis, exact σ*,
+the noise floor, and — given the part — a coarser mesh with ``h`` doubled below the plan's
+own, whose Richardson error estimate decides the verdict); verified rows rank first, and ``top`` lists the
+verified rows that are held.
 """
 
 from __future__ import annotations
@@ -37,8 +42,12 @@ class PadPlan:
     rows : list of dict
         One per axis that meets the part, best first: ``angle`` (rad), ``offset`` (m,
         from the area centroid), ``point`` (m), ``contacts`` (rest contact points, m),
-        ``sigma0``, ``sigma_star`` (m or None), ``quality`` (J), ``verdict``, ``method``
-        (``"exact"`` for the refined ones, ``"lattice"`` otherwise).
+        ``sigma0``, ``sigma_star`` (m or None), ``quality`` (J), ``verdict``
+        (``"candidate"`` or ``"not held"`` for a screened row; ``"held"``, ``"not held"``
+        or ``"undecided"`` for a verified one), ``verified`` (bool), ``axis``
+        (``{"point", "angle"}``, m and rad, as ``optimize --axis`` takes it), ``method``
+        (``"exact"`` for the verified ones, ``"lattice"`` otherwise) and, when verified,
+        ``error_estimate`` (``{"quality", "sigma_star"}``, J and m; ``None`` on one mesh).
     pad : Pad
     grid : AxisGrid
     n_sigma : int
@@ -52,14 +61,21 @@ class PadPlan:
     noise_relative: float
     top: list = field(default_factory=list)
 
+    @property
+    def held(self) -> list[dict]:
+        """The verified rows whose verdict is ``"held"``, best first (the plan's ``top``)."""
+        return [r for r in self.rows if r["verified"] and r["verdict"] == "held"]
+
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready report (SI)."""
+        """JSON-ready report (SI): ``axes`` (every row, verified first) and ``top`` (the
+        verified rows that are held; empty when none is)."""
         return {"model": "pads", "pad": self.pad.to_dict(),
                 "grid": {"n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets,
                          "d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
                          "origin": list(self.grid.origin)},
                 "n_sigma": self.n_sigma, "noise_floor_relative": self.noise_relative,
-                "axes": self.rows, "units": UNITS}
+                "n_verified": sum(r["verified"] for r in self.rows),
+                "axes": self.rows, "top": self.held, "units": UNITS}
 
 
 def _grid_graph(grid: AxisGrid) -> sp.csr_matrix:
@@ -77,7 +93,8 @@ def _grid_graph(grid: AxisGrid) -> sp.csr_matrix:
 
 def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigma: int = 64,
               top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
-              solver: PadContact | None = None, progress=None) -> PadPlan:
+              solver: PadContact | None = None, progress=None, part=None,
+              verify_levels: int = 2) -> PadPlan:
     """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
 
     Parameters
@@ -91,7 +108,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     n_sigma : int
         Separations in the shared lattice (at least 1).
     top : int
-        Number of best axes solved exactly afterwards (0: none).
+        Number of best candidates verified afterwards (0: none), ``--verify``.
     twin : PadContact, optional
         A second mesh realisation (:func:`.noise.twin_mesh`): ``noise_samples`` axes
         spread over the grid are solved on it too, and twice the 90th percentile of the
@@ -102,6 +119,15 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         Reuse a factorisation of ``mesh``.
     progress : callable, optional
         ``progress(done, total)`` while the axes are solved.
+    part : Part, optional
+        The part ``mesh`` was made from (with its own ``max_area``): verification then
+        solves each candidate on ``verify_levels`` meshes, ``mesh`` the finest and ``h``
+        doubled for each coarser one, with the error estimate and the verdict of
+        :class:`~deformclosure.pads.refine.RefinedPadGrasp`; without it, on
+        ``mesh`` alone (no error estimate: the verdict is "held" only for a barrier above
+        the noise floor on that mesh).
+    verify_levels : int
+        Meshes per verified candidate (1 to 5).
 
     Returns
     -------
@@ -125,8 +151,8 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     >>> mesh = mesh_part(notched_part(), max_area=1e-6)            # m²
     >>> plan = plan_pads(mesh, Pad(0.0, 2e-3), n_angles=6, n_offsets=16, n_sigma=16, top=1)
     >>> best = plan.rows[0]
-    >>> [round(v * 1e3, 3) for v in best["point"]], best["verdict"], best["method"]
-    ([15.0, 6.0], 'held', 'exact')
+    >>> [round(v * 1e3, 3) for v in best["point"]], best["verdict"], best["verified"]
+    ([15.0, 6.0], 'held', True)
     """
     e_L = elastic_limit_strain_of(mesh)
     _check_counts(n_angles=n_angles, n_offsets=n_offsets, n_sigma=n_sigma, top=(top, 0),
@@ -149,8 +175,12 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     rows = [_lattice_row(v, grid.axis(v), c, solver, lattice, E[v], UA[v], e_L)
             for v, c in enumerate(curves) if c.touch is not None]
     rows.sort(key=lambda r: -r["quality"])
-    refined = _refine_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets)
-    rows.sort(key=lambda r: (-r["quality"], r["method"] != "exact"))
+    refined = _verify_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets, part,
+                           verify_levels)
+    # verified rows first (held, then undecided, then not held), then the candidates
+    order = {"held": 0, "undecided": 1, "not held": 2, "candidate": 3}
+    rows.sort(key=lambda r: (not r["verified"], order[r["verdict"]] if r["verified"] else 0,
+                             -r["quality"]))
     for r in rows:
         r.pop("vertex")
     return PadPlan(rows, pad, grid, n_sigma, float(np.max(tau)), refined)
@@ -229,23 +259,76 @@ def _lattice_row(v: int, ax: GraspAxis, c: GraspCurve, solver: PadContact, latti
         if Q[k] > 0:
             q, s_star = float(Q[k]), float(lattice[k])
     return {"vertex": v, "angle": ax.angle, "offset": ax.offset, "point": ax.point.tolist(),
+            "axis": ax.to_dict(),
             "contacts": [c.touch.contact_a.tolist(), c.touch.contact_b.tolist()],
             "sigma0": c.sigma0, "sigma_star": s_star, "quality": q,
-            "verdict": "held" if q > 0 else "not held", "method": "lattice"}
+            "verdict": screened_verdict(q), "verified": False, "method": "lattice"}
 
 
-def _refine_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
-                 n_angles: int, n_offsets: int) -> list[PadGraspResult]:
-    """Solve the best lattice rows exactly (:func:`optimize_pads`, grid anchored at each),
-    updating them in place; stops at the first row that holds nothing."""
-    refined = []
+def screened_verdict(quality: float) -> str:
+    """The verdict of a row screened on the lattice (SPEC §6 "Plan"): ``"candidate"`` when
+    it shows a barrier, ``"not held"`` when it shows none — never ``"held"``: only
+    verification (:func:`_verify_best`) can say that."""
+    return "candidate" if quality > 0 else "not held"
+
+
+def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
+                 n_angles: int, n_offsets: int, part, levels: int) -> list:
+    """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`,
+    grid anchored at each axis, twice the plan's angular resolution), updating them in
+    place; stops at the first row that shows no barrier."""
+    from ..mesh.generate import default_max_area
+    from .refine import pad_grasp
+
+    area = default_max_area(part) if part is not None else None
+    verified = []
     for r in rows:
         if r["quality"] <= 0:
             break
         ax = GraspAxis(r["angle"], r["offset"], tuple(solver.centroid))
-        res = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, n_angles=2 * n_angles,
-                            n_offsets=n_offsets)
-        r.update({"sigma_star": res.sigma_star, "quality": res.quality, "verdict": res.verdict,
-                  "method": "exact", "lattice_quality": r["quality"]})
-        refined.append(res)
-    return refined
+        if part is not None and levels > 1:
+            # the plan's own mesh is the finest level and the coarser ones give the error;
+            # where a coarser mesh is blind (no node within the pads' reach), finer ones
+            res = _refined(part, ax, pad, levels, area, mesh, n_angles, n_offsets)
+            fine, err, verdict = res.finest, res.error_estimate(), res.verdict
+            if verdict == "held" and _blind(fine.solver.mesh, pad):
+                verdict = "undecided"      # a barrier read off a blind mesh is no evidence
+        else:
+            fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin,
+                                 n_angles=2 * n_angles, n_offsets=n_offsets)
+            err, verdict = {"quality": None, "sigma_star": None}, fine.verdict
+        r.update({"sigma_star": fine.sigma_star, "quality": fine.quality, "verdict": verdict,
+                  "verified": True, "method": "exact", "lattice_quality": r["quality"],
+                  "error_estimate": err, "force": fine.force,
+                  "n_levels": levels if part is not None else 1})
+        verified.append(fine)
+    return verified
+
+
+def _refined(part, ax: GraspAxis, pad: Pad, levels: int, area: float, mesh, n_angles: int,
+             n_offsets: int):
+    """:func:`pad_grasp` of one candidate on ``levels`` meshes ending at the plan's
+    (``h`` doubling below it), or starting at it (``h`` halving) when the plan's mesh or a
+    coarser one is blind: boundary nodes farther apart than the pads' contact reach, so
+    that energies follow the nodes, not the part."""
+    from .refine import pad_grasp
+
+    from ..mesh import mesh_part
+
+    opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
+    coarse_area = area * 4.0 ** (levels - 1)
+    coarse = mesh_part(part, max_area=coarse_area)
+    if not _blind(coarse, pad):
+        try:
+            return pad_grasp(part, ax, pad, mesh=coarse, refine=levels, max_area=coarse_area,
+                             **opts)
+        except GraspError as err:
+            if "within the pads' reach" not in str(err):
+                raise
+    return pad_grasp(part, ax, pad, mesh=mesh, refine=levels, max_area=area, **opts)
+
+
+def _blind(mesh, pad: Pad) -> bool:
+    """Whether the median boundary-node spacing exceeds the pads' contact reach."""
+    P = mesh.nodes[mesh.outer_loop]
+    return float(np.median(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1))) > pad.reach

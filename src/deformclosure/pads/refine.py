@@ -125,7 +125,7 @@ class RefinedPadGrasp:
 
 def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
               twin: bool = True, expanding_from=None, progress=None,
-              **options) -> RefinedPadGrasp:
+              max_area: float | None = None, **options) -> RefinedPadGrasp:
     """Optimal separation of a pad grasp, on one mesh or a refinement sequence.
 
     Parameters
@@ -146,6 +146,9 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
         Expanding grasp: a point (m) inside the hole the pads open in.
     progress : callable, optional
         Called with ``(level, n_levels)`` before each level.
+    max_area : float, optional
+        Largest triangle area (m²) of the first level (default the part's own); each
+        further level quarters it. ``mesh``, when given, must be that first level.
     **options
         Passed to :func:`optimize_pads`: ``n_angles``, ``n_offsets``, ``n_samples``,
         ``n_curve``, ``noise``.
@@ -180,8 +183,11 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
     if mesh is None:
         if part is None:
             raise GraspError("part: give a part or a mesh")
-        mesh = mesh_part(part)
-    base = default_max_area(part) if part is not None else float(mesh.areas.max())
+        mesh = mesh_part(part, max_area=max_area)
+    if max_area is not None:
+        base = float(max_area)
+    else:
+        base = default_max_area(part) if part is not None else float(mesh.areas.max())
     levels, areas = [], []
     for k in range(refine):
         if progress is not None:

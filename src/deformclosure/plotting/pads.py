@@ -139,14 +139,15 @@ def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
         c = np.asarray(row["contacts"]) * s
         col = f"C{k % 10}"
         ax.plot(c[:, 0], c[:, 1], "--o", color=col, lw=1, ms=4,
-                label=f"#{k + 1}: {np.degrees(row['angle']) % 180:.0f}°, Q* = {row['quality'] * 1e3:.3g} mJ")
+                label=f"#{k + 1}: {np.degrees(row['angle']) % 180:.0f}°, Q* = {row['quality'] * 1e3:.3g} mJ"
+                      f" ({row['verdict']})")
         res = next((r for r in plan.top if np.allclose(r.contacts * s, c)), None)
         if res is not None and res.sigma_star is not None:   # the gripper pose at σ*
             draw_pads(ax, res, res.sigma_star, units, color=col, alpha=0.55)
     ax.set_aspect("equal")
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    ax.set_title("best grasp axes (pads at σ* for the exactly solved ones)")
+    ax.set_title("best grasp axes (pads at σ* for the verified ones)")
     if ax.get_legend_handles_labels()[0]:
         legend_outside(ax)
     return ax.figure

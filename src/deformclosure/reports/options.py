@@ -221,7 +221,11 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="pads: grasp axes for rigid pads (SPEC §6); paper: node pairs (SPEC §4)."),
         *_pads(36, 40),
         Opt("top", ("--top",), "int", 10, show_default=True,
-            help="Refine the best N pairs (paper) or axes (pads) with the exact method."),
+            help="Refine the best N pairs (paper) with the exact method; rows shown (pads)."),
+        Opt("verify", ("--verify",), "int", 5, show_default=True,
+            help="pads: verify the best N screened candidates with optimize's code path on "
+                 "the plan's mesh and one with h doubled (error estimate); only a verified "
+                 "row can be 'held'."),
         Opt("eps", ("--eps",), "float",
             help="paper: every pair's quality within eps of its optimum, in joules."),
         Opt("allow_pulling", ("--allow-pulling",), "flag", False,

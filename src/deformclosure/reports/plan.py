@@ -18,6 +18,8 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     p = params
     if p["top"] < 0:
         raise GraspError(f"--top = {p['top']}: must be >= 0")
+    if p["verify"] < 0:
+        raise GraspError(f"--verify = {p['verify']}: must be >= 0 (0: screen only)")
     if p["model"] == "pads":
         only_for("paper", [("--eps", p["eps"] is not None), ("--expanding", p["expanding"]),
                            ("--jaw-width", p["jaw_width"] != 0.0),
@@ -26,6 +28,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
                            ("--region", bool(p["region"])),
                            ("--allow-pulling", p["allow_pulling"])], "add --model paper")
         return _pads(part, p, progress)
+    only_for("pads", [("--verify", p["verify"] != 5)], "drop --model paper")
     return _paper(part, p, progress)
 
 
@@ -45,24 +48,46 @@ def _pads(part, p: dict, progress) -> Report:
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
-                    top=p["top"], twin=twin, progress=progress)
+                    top=p["verify"], twin=twin, progress=progress, part=inp.part)
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)
 
 
+def _clean(v: float, scale: float) -> float:
+    """A printed coordinate without floating-point dust (``-9.2e-16`` → 0), relative to the
+    part's size ``scale``."""
+    return 0.0 if abs(v) < 1e-9 * scale else v
+
+
 def _pads_lines(res, pad, top: int, inp) -> list[str]:
     s, unit = 1.0 / inp.scale, inp.unit
+    size = inp.mesh.diameter * s
+    nv = sum(r["verified"] for r in res.rows)
     lines = [f"{len(res.rows)} grasp axes (pads W = {pad.width * s:.4g}, rho = "
-             f"{pad.radius * s:.4g} {unit})",
-             f"{'rank':>4} {'angle':>7} {'contact A (' + unit + ')':>20} {'contact B':>18} "
-             f"{'sigma*':>9} {'Q (J)':>11} {'verdict':>9} {'method':>8}"]
+             f"{pad.radius * s:.4g} {unit}); {nv} verified, the others screened "
+             f"(a screened row is a candidate, never 'held')",
+             f"{'rank':>4} {'--axis X,Y,DEG (' + unit + ')':>26} {'sigma*':>9} {'Q (J)':>11} "
+             f"{'± (J)':>9} {'verdict':>10}"]
     for i, r in enumerate(res.rows[:max(top, 5)]):
-        ca, cb = (np.asarray(c) * s for c in r["contacts"])
+        x, y = (_clean(v * s, size) for v in r["axis"]["point"])
+        ax = f"{x:.4g},{y:.4g},{_clean(np.degrees(r['axis']['angle']), 360.0):.4g}"
         ss = "-" if r["sigma_star"] is None else f"{r['sigma_star'] * s:.4g}"
-        lines.append(f"{i + 1:>4} {np.degrees(r['angle']):>6.1f}° {ca[0]:>9.4g},{ca[1]:<9.4g} "
-                     f"{cb[0]:>8.4g},{cb[1]:<8.4g} {ss:>9} {r['quality']:>11.4g} "
-                     f"{r['verdict']:>9} {r['method']:>8}")
+        err = (r.get("error_estimate") or {}).get("quality")
+        es = "-" if err is None else f"{err:.3g}"
+        lines.append(f"{i + 1:>4} {ax:>26} {ss:>9} {r['quality']:>11.4g} {es:>9} "
+                     f"{r['verdict']:>10}")
+    held = res.held
+    if held:
+        r = held[0]
+        x, y = (_clean(v * s, size) for v in r["axis"]["point"])
+        lines.append(f"best verified grasp: optimize --axis {x:.6g},{y:.6g},"
+                     f"{_clean(np.degrees(r['axis']['angle']), 360.0):.6g} "
+                     f"(Q* = {r['quality']:.4g} J)")
+    else:
+        lines.append("no verified axis holds the part (top is empty): "
+                     + ("every verified candidate is 'not held' or 'undecided'" if nv
+                        else "no candidate showed a barrier to verify"))
     return lines
 
 
