@@ -15,7 +15,8 @@ from ezdxf.math import rational_bspline_from_arc
 
 from deformclosure import DeformClosureError, Part
 from deformclosure.cli.main import main
-from deformclosure.drawing import part_from_drawing, read_drawing
+from deformclosure.drawing import read_drawing
+from deformclosure.part import part_from_drawing
 
 ROOT = Path(__file__).resolve().parents[1]
 RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1,
@@ -231,6 +232,7 @@ def test_svg_physical_width_converts_exactly(width, expected_mm):
     """svgelements turns mm into px with a 7-digit factor (a 20 mm drawing came out
     20.0000108 mm); the physical width as written fixes the scale exactly."""
     from deformclosure.drawing import read_drawing
+from deformclosure.part import part_from_drawing
     from deformclosure.jsonfile import Source
 
     svg = (f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="1in" '

@@ -38,7 +38,7 @@ _HOMES = {
     # inputs
     "Part": "part", "Material": "part", "MeshOptions": "part", "demo_part": "part",
     "notched_part": "part", "read_material": "part",
-    "part_from_drawing": "drawing", "read_drawing": "drawing",
+    "part_from_drawing": "part", "read_drawing": "drawing",
     "Source": "jsonfile",
     "Mesh": "mesh", "mesh_part": "mesh", "read_mesh": "mesh", "write_mesh": "mesh",
     # elasticity
