@@ -232,7 +232,6 @@ def test_svg_physical_width_converts_exactly(width, expected_mm):
     """svgelements turns mm into px with a 7-digit factor (a 20 mm drawing came out
     20.0000108 mm); the physical width as written fixes the scale exactly."""
     from deformclosure.drawing import read_drawing
-from deformclosure.part import part_from_drawing
     from deformclosure.jsonfile import Source
 
     svg = (f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="1in" '
