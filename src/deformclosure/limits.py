@@ -417,8 +417,8 @@ def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: flo
     per_area = _rate(_PER_AREA, min_angle)
     if per_area * area / max_area > MAX_TRIANGLES:
         n = per_area * area / max_area
-        raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about {format_count(n)} "
-                        f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= "
+        raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about "
+                        f"{format_count(n)} triangles (limit {MAX_TRIANGLES:,}); use {field} >= "
                         f"{max_area * n / MAX_TRIANGLES / scale**2:.2g} {units}²")
     est = estimate_triangles(rings, max_area, min_angle, points)
     if est.thin_elements > MAX_THIN_ELEMENTS:
@@ -432,8 +432,8 @@ def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: flo
     if est.triangles > MAX_TRIANGLES:
         need = max_area * est.triangles / MAX_TRIANGLES / scale**2
         raise PartError(
-            f"{field} = {ma:.3g} {units}²: the mesh would have about {format_count(est.triangles)} "
-            f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= {need:.2g} {units}² or "
+            f"{field} = {ma:.3g} {units}²: the mesh would have about "
+            f"{format_count(est.triangles)} triangles (limit {MAX_TRIANGLES:,}); use {field} >= {need:.2g} {units}² or "
             "simplify the part's boundary")
     return est
 
@@ -646,9 +646,10 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
         nnz = _averaging_nonzeros(n_triangles, area, ell)
         if nnz > MAX_AVERAGING_NONZEROS:
             raise GraspError(f"{what}: averaging strains over the critical distance "
-                             f"({ell:.3g} m) on {n_triangles:,} triangles needs {format_count(nnz)} "
-                             f"element pairs (limit {format_count(MAX_AVERAGING_NONZEROS)}); coarsen "
-                             "the mesh (larger max_area) or give a smaller "
+                             f"({ell:.3g} m) on {n_triangles:,} triangles needs "
+                             f"{format_count(nnz)} element pairs (limit "
+                             f"{format_count(MAX_AVERAGING_NONZEROS)}); coarsen the mesh "
+                             "(larger max_area) or give a smaller "
                              "material.critical_distance")
     est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
