@@ -160,7 +160,9 @@ class Import:
 
     ``target`` is the module that the statement loads (``from .a import b`` loads ``a.b``
     when that is a module, else ``a``); ``name`` the name taken from it (``b``; ``None``
-    for ``import x`` and for a submodule), ``line`` where, ``when`` see :data:`WHEN`.
+    for ``import x`` and for a submodule), ``line`` where, ``when`` see :data:`WHEN`;
+    ``alias`` the local name it binds, and what it binds is ``target`` (``name`` None)
+    or ``target.name`` (for ``import a.b`` without ``as``: ``a``, bound to ``a``).
     """
 
     importer: str
@@ -168,6 +170,37 @@ class Import:
     name: str | None
     line: int
     when: str
+    alias: str = ""
+
+
+def scan_imports_of(mod: str, tree: ast.Module, mods, pkg: str = PKG) -> list[Import]:
+    """Every import statement of the module ``mod`` (its parsed ``tree``)."""
+    package = mod if mods[mod].name == "__init__.py" else mod.rpartition(".")[0]
+    out = []
+    for node, when in _import_nodes(tree.body):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                out.append(Import(mod, a.name, None, node.lineno, when, a.asname or a.name))
+                if a.asname is None and "." in a.name:       # ``import a.b`` binds ``a``
+                    out.append(Import(mod, a.name.split(".")[0], None, node.lineno, when,
+                                      a.name.split(".")[0]))
+            continue
+        if node.level:
+            base = package.split(".")
+            base = base[:len(base) - (node.level - 1)]
+            stem = ".".join(base + ([node.module] if node.module else []))
+        else:
+            stem = node.module
+        for alias in node.names:
+            sub = f"{stem}.{alias.name}"
+            bind = alias.asname or alias.name
+            if sub in mods:           # ``from . import x``: the submodule ``x``
+                out.append(Import(mod, sub, None, node.lineno, when, bind))
+            elif stem.split(".")[0] != pkg:
+                out.append(Import(mod, sub, None, node.lineno, when, bind))
+            else:
+                out.append(Import(mod, stem, alias.name, node.lineno, when, bind))
+    return out
 
 
 def scan_imports(src: Path = SRC, pkg: str = PKG) -> list[Import]:
@@ -176,27 +209,8 @@ def scan_imports(src: Path = SRC, pkg: str = PKG) -> list[Import]:
     mods = source_modules(src, pkg)
     out = []
     for mod, path in mods.items():
-        is_pkg = path.name == "__init__.py"
-        package = mod if is_pkg else mod.rpartition(".")[0]
-        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
-        for node, when in _import_nodes(tree.body):
-            if isinstance(node, ast.Import):
-                out += [Import(mod, a.name, None, node.lineno, when) for a in node.names]
-                continue
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                stem = ".".join(base + ([node.module] if node.module else []))
-            else:
-                stem = node.module
-            for alias in node.names:
-                sub = f"{stem}.{alias.name}"
-                if sub in mods:           # ``from . import x``: the submodule ``x``
-                    out.append(Import(mod, sub, None, node.lineno, when))
-                elif stem.split(".")[0] != pkg:
-                    out.append(Import(mod, sub, None, node.lineno, when))
-                else:
-                    out.append(Import(mod, stem, alias.name, node.lineno, when))
+        out += scan_imports_of(mod, ast.parse(path.read_text(encoding="utf-8"), str(path)),
+                               mods, pkg)
     return out
 
 
@@ -396,6 +410,36 @@ def private_violations(src: Path = SRC, pkg: str = PKG) -> list[Violation]:
             what = t if imp.name is None else f"{t}.{imp.name}"
             out.append(Violation(_short(imp.importer, pkg), _short(what, pkg), imp.line,
                                  f"private {', '.join(private)} of {_top(t)}"))
+    out += _private_attributes(src, pkg)
+    return out
+
+
+def _private_attributes(src: Path, pkg: str) -> list[Violation]:
+    """``mod._name`` where ``mod`` is bound by an import to a module (or name) of another
+    top-level subpackage: the same reach into private names, through an attribute."""
+    mods = source_modules(src, pkg)
+    out = []
+    for mod, path in mods.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        bound: dict[str, str] = {}
+        for imp in scan_imports_of(mod, tree, mods, pkg):
+            if imp.target.split(".")[0] == pkg:
+                bound[imp.alias] = imp.target if imp.name is None else f"{imp.target}.{imp.name}"
+
+        def resolve(node) -> str | None:
+            if isinstance(node, ast.Name):
+                return bound.get(node.id)
+            if isinstance(node, ast.Attribute):
+                base = resolve(node.value)
+                return None if base is None else f"{base}.{node.attr}"
+            return None
+
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and _is_private(node.attr):
+                base = resolve(node.value)
+                if base is not None and _top(base) != _top(mod):
+                    out.append(Violation(_short(mod, pkg), _short(f"{base}.{node.attr}", pkg),
+                                         node.lineno, f"private {node.attr} of {_top(base)}"))
     return out
 
 
@@ -559,9 +603,9 @@ def _plant(root: Path, files: dict[str, str]) -> Path:
 def test_the_checks_fail_on_a_planted_cycle_and_upward_import(tmp_path):
     """A throw-away package with a cycle hidden in a function-level import (low → mid at
     module level, mid → low inside a function, through ``from . import``), an upward
-    import inside a method, a model reaching another's private kernel and a cycle that
-    exists only under ``TYPE_CHECKING``: the same functions the tests above use find
-    exactly the planted faults."""
+    import inside a method, a model reaching another's private kernel (by import and by
+    attribute) and a cycle that exists only under ``TYPE_CHECKING``: the same functions
+    the tests above use find exactly the planted faults."""
     src = _plant(tmp_path, {
         "__init__.py": "",
         "low.py": "from .mid import helper\n",
@@ -580,6 +624,7 @@ def test_the_checks_fail_on_a_planted_cycle_and_upward_import(tmp_path):
         "top/run.py": "from ..low import helper as main\n",
         "models/__init__.py": "",
         "models/a.py": "def f():\n    from ..other._kernels import k\n",
+        "models/b.py": "import pk.other.own\nx = pk.other.own._hidden\n",
         "other/__init__.py": "",
         "other/_kernels.py": "k = 1\n",
         "other/own.py": "from ._kernels import k\n",           # its own kernels: fine
@@ -602,7 +647,7 @@ def test_the_checks_fail_on_a_planted_cycle_and_upward_import(tmp_path):
     assert "L1 imports L3" in str(bad[0]) and "base:3" in str(bad[0])
     priv = private_violations(src, "pk")
     assert [(v.importer, v.imported, v.line) for v in priv] == [
-        ("models.a", "other._kernels.k", 2)]
+        ("models.a", "other._kernels.k", 2), ("models.b", "other.own._hidden", 2)]
     # models apart: a model package importing another at all is refused
     bad = layer_violations(src, "pk", layer=lambda m: layer_of(m, table),
                            apart=("models", "other"))
