@@ -3,17 +3,18 @@
 
 The constants and the cost model are the foundation's (:mod:`deformclosure.limits`);
 this module reads what the pads model needs from a mesh — its boundary, its area and the
-material's critical distance (:func:`~deformclosure.pads.limit.critical_distance_of`) —
-and asks :func:`~deformclosure.limits.check_plan_size` before the heavy work.
+material's critical distance
+(:func:`~deformclosure.elasticity.critical_distance.critical_distance_of`) — and asks
+:func:`~deformclosure.limits.check_plan_size` before the heavy work.
 """
 
 from __future__ import annotations
 
 from numbers import Integral
 
+from ..elasticity.critical_distance import critical_distance_of
 from ..errors import GraspError
 from ..limits import MAX_TRIANGLES, check_plan_size, format_count
-from .limit import critical_distance_of
 
 __all__ = ["check_pads_size"]
 
