@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import deformclosure as dc
-from deformclosure.drawing import part_from_drawing
+from deformclosure.part import part_from_drawing
 from deformclosure.pads import GraspAxis, Pad, pad_grasp
 from deformclosure.pads.plan import plan_pads
 from deformclosure.plotting.mesh import plot_mesh

@@ -15,7 +15,8 @@ from ezdxf.math import rational_bspline_from_arc
 
 from deformclosure import DeformClosureError, Part
 from deformclosure.cli.main import main
-from deformclosure.drawing import part_from_drawing, read_drawing
+from deformclosure.drawing import read_drawing
+from deformclosure.part import part_from_drawing
 
 ROOT = Path(__file__).resolve().parents[1]
 RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1,

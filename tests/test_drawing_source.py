@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from deformclosure import PartError
-from deformclosure.drawing import (is_drawing_file, material_file_beside, part_from_drawing,
-                                   read_drawing)
+from deformclosure.drawing import is_drawing_file, material_file_beside, read_drawing
 from deformclosure.jsonfile import Source
+from deformclosure.part import part_from_drawing
 
 ROOT = Path(__file__).resolve().parents[1]
 GASKET = ROOT / "examples" / "drawings" / "gasket.dxf"

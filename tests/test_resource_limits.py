@@ -21,7 +21,9 @@ import pytest
 from deformclosure import limits
 from deformclosure.cli.main import main
 from deformclosure.errors import DeformClosureError, GraspError, MeshError, PartError
+from deformclosure.grasp.size_limits import check_paper_size
 from deformclosure.mesh.generate import insert_points_in_ring, mesh_part
+from deformclosure.pads.size_limits import check_pads_size
 from deformclosure.part import Part
 
 RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
@@ -261,29 +263,29 @@ def _fake_mesh(n_outer, n_nodes, n_triangles, n_hole=0, area=1e-4, diameter=0.01
 
 def test_plan_sizes_just_under_the_limits_are_accepted():
     P = limits.MAX_BOUNDARY_NODES_PAPER
-    limits.check_model_size(_fake_mesh(P, 3 * P, 5 * P), "paper", plan=True)
+    check_paper_size(_fake_mesh(P, 3 * P, 5 * P), plan=True)
     with pytest.raises(GraspError, match=r"^--model paper: the mesh has 1,201 jaw nodes"):
-        limits.check_model_size(_fake_mesh(P + 1, 3 * P, 5 * P), "paper")
+        check_paper_size(_fake_mesh(P + 1, 3 * P, 5 * P))
     # expanding grasps pair the nodes of every loop
     with pytest.raises(GraspError, match="jaw nodes"):
-        limits.check_model_size(_fake_mesh(P, 3 * P, 5 * P, n_hole=10), "paper", mode="expanding")
+        check_paper_size(_fake_mesh(P, 3 * P, 5 * P, n_hole=10), mode="expanding")
     Q = limits.MAX_BOUNDARY_NODES_PADS
-    limits.check_model_size(_fake_mesh(Q, 3 * Q, 5 * Q), "pads", solvers=2, n_axes=36 * 40)
+    check_pads_size(_fake_mesh(Q, 3 * Q, 5 * Q), solvers=2, n_axes=36 * 40)
     with pytest.raises(GraspError, match=r"^--model pads: the mesh has 2,001 boundary nodes"):
-        limits.check_model_size(_fake_mesh(Q + 1, 3 * Q, 5 * Q), "pads", solvers=2)
+        check_pads_size(_fake_mesh(Q + 1, 3 * Q, 5 * Q), solvers=2)
     with pytest.raises(GraspError, match=r"--grid-angles"):      # a plan over 2000 x 2000 axes
-        limits.check_model_size(_fake_mesh(Q, 3 * Q, 5 * Q), "pads", n_axes=2000 * 2000)
-    limits.check_model_size(_fake_mesh(Q, 3 * Q, 5 * Q), "pads", solvers=3, what="check")
+        check_pads_size(_fake_mesh(Q, 3 * Q, 5 * Q), n_axes=2000 * 2000)
+    check_pads_size(_fake_mesh(Q, 3 * Q, 5 * Q), solvers=3, what="check")
     with pytest.raises(GraspError, match=r"^check: the mesh has 2,001 boundary nodes"):
-        limits.check_model_size(_fake_mesh(Q + 1, 3 * Q, 5 * Q), "pads", solvers=3, what="check")
+        check_pads_size(_fake_mesh(Q + 1, 3 * Q, 5 * Q), solvers=3, what="check")
     # the largest mesh with the default critical distance (2 % of the diameter)
     m = limits.MAX_TRIANGLES
     big = _fake_mesh(2000, m // 2, m, area=1e-4, diameter=0.0125)
     with pytest.raises(GraspError, match="critical distance"):
-        limits.check_model_size(big, "pads")
+        check_pads_size(big)
     # --refine 3 on a 30 000-triangle mesh: the finest has 480 000 triangles
     with pytest.raises(GraspError, match=r"^--refine 3: the finest mesh would have about 480,000"):
-        limits.check_model_size(_fake_mesh(200, 15_000, 30_000), "pads", refine=3)
+        check_pads_size(_fake_mesh(200, 15_000, 30_000), refine=3)
     # strain responses of the planner: what the budget leaves after the model
     limits.check_strain_responses(P, 5_000, 8_000)
     with pytest.raises(GraspError, match="strain responses of 1,200 perimeter nodes"):

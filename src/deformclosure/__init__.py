@@ -7,15 +7,17 @@ The public API (SPEC §5) is importable from the top level; each name is loaded 
 home module on first use (PEP 562), so ``import deformclosure`` stays light — no numpy,
 scipy, numba, matplotlib, click, sqlite3 or multiprocessing until they are needed.
 
-Layers, low to high (no module imports one above it at import time)::
+Layers, low to high (no module imports one above it, not even inside a function, and
+there is no import cycle; ``docs/architecture.md``)::
 
-    errors, choices, geometry, units, jsonfile, outputs, log     foundation
-    part, drawing, mesh                                           inputs
-    elasticity                                                    stiffness, solves
-    grasp (paper model), dspace (fingers), pads, fields, limits   models
-    planning, plotting                                            planners, pictures
-    reports (one function per command), batch                     commands as a library
-    cli                                                           the shell
+    errors, choices, geometry, units, jsonfile, outputs, log, limits   foundation
+    part, drawing, mesh                                                 inputs
+    elasticity                                                          stiffness, solves
+    contact, landscape, graph_kernels                                   mechanics
+    grasp (paper model), dspace (fingers), pads, fields                 models
+    planning, plotting                                                  planners, pictures
+    reports (one function per command), batch                           commands as a library
+    cli                                                                 the shell
 
 Examples
 --------
@@ -38,7 +40,7 @@ _HOMES = {
     # inputs
     "Part": "part", "Material": "part", "MeshOptions": "part", "demo_part": "part",
     "notched_part": "part", "read_material": "part",
-    "part_from_drawing": "drawing", "read_drawing": "drawing",
+    "part_from_drawing": "part", "read_drawing": "drawing",
     "Source": "jsonfile",
     "Mesh": "mesh", "mesh_part": "mesh", "read_mesh": "mesh", "write_mesh": "mesh",
     # elasticity

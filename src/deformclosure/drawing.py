@@ -13,7 +13,9 @@ Units: a DXF file's ``$INSUNITS`` header, an SVG file's physical ``width``/``hei
 
 A drawing holds no material: it comes from the caller, or from a small JSON file beside
 the drawing, ``<name>.material.json`` (a material object, optionally with ``units`` and
-a ``mesh`` block of part-file mesh options).
+a ``mesh`` block of part-file mesh options). The part itself is made by
+:func:`deformclosure.part.part_from_drawing` (this module reads the geometry and knows
+nothing of parts, so ``part`` can read a drawing wherever it reads a part file).
 
 Every reader takes a path or a :class:`~deformclosure.jsonfile.Source` (a file's name and
 bytes, read once); the file beside the drawing is looked up only for a path.
@@ -34,8 +36,8 @@ from .errors import PartError
 from .jsonfile import InputFile, Source, as_source
 from .units import LENGTH_UNITS
 
-__all__ = ["DRAWING_SUFFIXES", "Drawing", "read_drawing", "part_from_drawing",
-           "is_drawing_file", "material_file_beside"]
+__all__ = ["DRAWING_SUFFIXES", "Drawing", "read_drawing", "drawing_source", "is_drawing_file",
+           "material_file_beside", "material_path_beside"]
 
 #: File suffixes read as drawings.
 DRAWING_SUFFIXES = (".dxf", ".svg")
@@ -125,7 +127,7 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
     >>> d.units, len(d.outer), len(d.holes)
     ('mm', 4, 1)
     """
-    src = _source(path)
+    src = drawing_source(path)
     _check_options(units, default_units, tolerance)
     if src.suffix == ".dxf":
         pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
@@ -141,7 +143,7 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
     return _assemble(loops, unit, src.name)
 
 
-def _source(path: InputFile) -> Source:
+def drawing_source(path: InputFile) -> Source:
     """The drawing as a Source (read once from a path)."""
     if not isinstance(path, (str, os.PathLike, Source)):
         raise PartError(f"drawing = {path!r}: give the path of a .dxf or .svg file")
@@ -640,101 +642,10 @@ def material_file_beside(path: InputFile) -> Path | None:
     ``sidecar`` (the material file's bytes read with the drawing's, or ``None``)."""
     if isinstance(path, Source):
         return path.sidecar
-    side = _side_path(Path(path))
+    side = material_path_beside(Path(path))
     return side if side.is_file() else None
 
 
-def _side_path(path: Path) -> Path:
+def material_path_beside(path: Path) -> Path:
+    """Where the material file of the drawing at ``path`` is: ``<name>.material.json``."""
     return path.with_name(path.stem + ".material.json")
-
-
-def part_from_drawing(path: InputFile, material=None, units: str | None = None,
-                      layer: str | None = None, tolerance: float | None = None,
-                      mesh: dict | None = None, name: str | None = None,
-                      default_units: str | None = None, material_file: InputFile | None = None):
-    """A :class:`~deformclosure.part.Part` from a drawing.
-
-    Parameters
-    ----------
-    path : path-like or Source
-        ``.dxf`` or ``.svg`` file, or its name and bytes
-        (:class:`~deformclosure.jsonfile.Source`).
-    material : Material, str, path-like or Source, optional
-        A material, or the text of ``--material`` (inline JSON or a JSON file; lengths in
-        the drawing's units unless it states its own). Default: from ``material_file``.
-    units, layer, tolerance, default_units
-        See :func:`read_drawing`.
-    mesh : dict, optional
-        Part-file mesh options (``max_area`` in units², ``min_angle``, ``points``); default
-        from ``material_file``, if it has a ``mesh`` block.
-    name : str, optional
-        Default: the file's stem.
-    material_file : path-like or Source, optional
-        The drawing's material file: a material object, optionally with ``units`` and a
-        ``mesh`` block. Default: :func:`material_file_beside` the drawing (a path only).
-
-    Raises
-    ------
-    PartError
-
-    Examples
-    --------
-    >>> from deformclosure.jsonfile import Source
-    >>> svg = (b'<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="10mm" '
-    ...        b'viewBox="0 0 20 10"><rect width="20" height="10"/>'
-    ...        b'<circle cx="10" cy="5" r="2"/></svg>')
-    >>> part = part_from_drawing(Source("plate.svg", svg), material='{"youngs_modulus": 2e6, '
-    ...     '"poisson_ratio": 0.1, "thickness": 1, "elastic_limit_strain": 0.8}')
-    >>> part.units, len(part.holes), round(part.area * 1e6)      # mm²
-    ('mm', 1, 188)
-    """
-    from .part import Material, Part, read_material
-    from .units import length_scale
-
-    src = _source(path)
-    drawing = read_drawing(src, units, layer, tolerance, default_units)
-    if isinstance(material, (str, os.PathLike, Source)):
-        material = read_material(material, drawing.units)
-    elif material is not None and not isinstance(material, Material):
-        raise PartError(f"material = {material!r}: give a Material, inline JSON or a "
-                        "material file")
-    if material is None or mesh is None:
-        side = material_file if material_file is not None else material_file_beside(path)
-        if side is not None:
-            material, mesh = _material_file(side, drawing.units, material, mesh)
-        elif material is None:
-            hint = "" if isinstance(path, Source) else \
-                f" or put it in {_side_path(Path(path)).name} beside the drawing"
-            raise PartError(f"{src.name}: a drawing has no material; give --material "
-                            f"FILE|JSON{hint}")
-    scale = length_scale(drawing.units)
-    mat = material.to_dict()
-    mat["thickness"] = material.thickness / scale
-    if material.critical_distance is not None:
-        mat["critical_distance"] = material.critical_distance / scale
-    data = {"name": name or Path(src.name).stem, "units": drawing.units,
-            "outer": drawing.outer.tolist(), "holes": [h.tolist() for h in drawing.holes],
-            "material": mat}
-    if mesh is not None:
-        data["mesh"] = mesh
-    part = Part.from_dict(data)
-    import dataclasses
-
-    return dataclasses.replace(part, material=material)
-
-
-def _material_file(side: InputFile, units: str, material, mesh):
-    """``(material, mesh)``, each kept if given, else from the material file ``side``
-    (lengths in the drawing's ``units`` unless it states its own)."""
-    import json
-
-    from .jsonfile import read_json
-    from .part import read_material
-
-    data = read_json(side if isinstance(side, Source) else Path(side), PartError, "material file")
-    if isinstance(data, dict) and mesh is None and isinstance(data.get("mesh"), dict):
-        mesh = data["mesh"]
-    if material is None:
-        blob = {k: v for k, v in data.items() if k != "mesh"} if isinstance(data, dict) else data
-        material = read_material(json.dumps(blob), units, str(side))
-    return material, mesh

@@ -146,9 +146,9 @@ def state_data(mesh, state: FieldState, ell: float) -> tuple[dict, dict]:
     cell = {"strain": [tensor], "strain_magnitude": [mag],
             "strain_magnitude_averaged": [mag_avg]}
     if mesh.material is not None:
-        from .mesh.io import _material_cell_data
+        from .mesh.io import material_cell_data
 
-        cell.update(_material_cell_data(mesh.material, len(mesh.triangles)))
+        cell.update(material_cell_data(mesh.material, len(mesh.triangles)))
     return point, cell
 
 

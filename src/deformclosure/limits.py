@@ -15,6 +15,14 @@ The maxima are set for a machine with :data:`MEMORY_BUDGET` = 4 GB; the costs we
 measured with ``benchmarks/bench_limits.py``, which runs every command at (or near) its
 documented maximum and prints its peak resident memory and time.
 
+The module is part of the foundation layer (``docs/architecture.md``): it imports only
+:mod:`~deformclosure.choices` and :mod:`~deformclosure.errors`, and its checks take plain
+sizes and rings, so every layer may call them (``part`` and ``mesh`` on reading and
+meshing a part). What needs a model — the size of a mesh's analysis under that model —
+is estimated beside the model and passed here as numbers:
+:func:`deformclosure.grasp.size_limits.check_paper_size` and
+:func:`deformclosure.pads.size_limits.check_pads_size` call :func:`check_plan_size`.
+
 The CLI builds its ``--help`` texts from the maxima (:func:`limits_help`), so importing
 this module loads no numpy or shapely: the functions that need them import them.
 """
@@ -55,8 +63,8 @@ __all__ = [
     "check_mesh_points",
     "estimate_model_bytes",
     "check_plan_size",
-    "check_model_size",
     "check_slice_size",
+    "format_count",
     "limits_help",
 ]
 
@@ -181,7 +189,7 @@ MAX_SLICE_RESOLUTION = 2_000
 SLICE_JSON_BYTES_PER_VALUE = 60.0
 
 
-def _fmt(n: float) -> str:
+def format_count(n: float) -> str:
     """A count for messages: ``1,200`` or ``3.9e+06``."""
     return f"{int(n):,}" if n < 1e7 else f"{n:.2g}"
 
@@ -409,8 +417,8 @@ def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: flo
     per_area = _rate(_PER_AREA, min_angle)
     if per_area * area / max_area > MAX_TRIANGLES:
         n = per_area * area / max_area
-        raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about {_fmt(n)} "
-                        f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= "
+        raise PartError(f"{field} = {ma:.3g} {units}²: the mesh would have about "
+                        f"{format_count(n)} triangles (limit {MAX_TRIANGLES:,}); use {field} >= "
                         f"{max_area * n / MAX_TRIANGLES / scale**2:.2g} {units}²")
     est = estimate_triangles(rings, max_area, min_angle, points)
     if est.thin_elements > MAX_THIN_ELEMENTS:
@@ -419,13 +427,13 @@ def check_mesh_size(rings: Sequence[np.ndarray], max_area: float, min_angle: flo
         raise PartError(
             f"{_ring_name(est.worst_ring)}: the part is only {w:.3g} {units} wide along a "
             f"{ln:.3g} {units} edge; meshing such narrow features needs about "
-            f"{_fmt(est.thin_elements)} boundary elements (limit {MAX_THIN_ELEMENTS:,}); "
+            f"{format_count(est.thin_elements)} boundary elements (limit {MAX_THIN_ELEMENTS:,}); "
             "widen or remove the narrow feature")
     if est.triangles > MAX_TRIANGLES:
         need = max_area * est.triangles / MAX_TRIANGLES / scale**2
         raise PartError(
-            f"{field} = {ma:.3g} {units}²: the mesh would have about {_fmt(est.triangles)} "
-            f"triangles (limit {MAX_TRIANGLES:,}); use {field} >= {need:.2g} {units}² or "
+            f"{field} = {ma:.3g} {units}²: the mesh would have about "
+            f"{format_count(est.triangles)} triangles (limit {MAX_TRIANGLES:,}); use {field} >= {need:.2g} {units}² or "
             "simplify the part's boundary")
     return est
 
@@ -625,7 +633,7 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
     if model == "paper" and q > MAX_BOUNDARY_NODES_PAPER:
         raise GraspError(f"{what}: the mesh has {q:,} jaw nodes on its boundary, more than "
                          f"the limit {MAX_BOUNDARY_NODES_PAPER:,} (the contact graph of all "
-                         f"{_fmt(q * (q - 1) / 2)} node pairs would need about "
+                         f"{format_count(q * (q - 1) / 2)} node pairs would need about "
                          f"{PAPER_GRAPH_BYTES_PER_P2 * q * q / GB:.1f} GB); coarsen the boundary "
                          "(larger max_area, fewer ring vertices) or use the pads model")
     top = MAX_BOUNDARY_NODES_PADS
@@ -638,9 +646,10 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
         nnz = _averaging_nonzeros(n_triangles, area, ell)
         if nnz > MAX_AVERAGING_NONZEROS:
             raise GraspError(f"{what}: averaging strains over the critical distance "
-                             f"({ell:.3g} m) on {n_triangles:,} triangles needs {_fmt(nnz)} "
-                             f"element pairs (limit {_fmt(MAX_AVERAGING_NONZEROS)}); coarsen "
-                             "the mesh (larger max_area) or give a smaller "
+                             f"({ell:.3g} m) on {n_triangles:,} triangles needs "
+                             f"{format_count(nnz)} element pairs (limit "
+                             f"{format_count(MAX_AVERAGING_NONZEROS)}); coarsen the mesh "
+                             "(larger max_area) or give a smaller "
                              "material.critical_distance")
     est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
@@ -656,62 +665,6 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
                          f"about {est['total'] / GB:.1f} GB ({part}: {size / GB:.1f} GB), more "
                          f"than {MEMORY_BUDGET / GB:.0f} GB; {hint}")
     return est
-
-
-def check_model_size(mesh, model: str, *, mode: str = "contracting", plan: bool = False,
-                     solvers: int = 1, refine: int = 1, restricted: bool = False,
-                     n_axes: int = 0, what: str | None = None) -> dict[str, float]:
-    """:func:`check_plan_size` for a mesh: the single call the commands make before the
-    heavy work.
-
-    Parameters
-    ----------
-    mesh : Mesh
-    model : {"paper", "pads"}
-    mode : {"contracting", "expanding"}
-        Paper model: expanding grasps pair the nodes of every loop.
-    plan : bool
-        Paper model: the planner (strain responses of every jaw node).
-    solvers : int
-        Pads: factorised meshes held at once (2 with the noise-floor twin).
-    refine : int
-        Pads ``--refine N`` (1..5): the finest of N meshes has about 4^(N−1) times the
-        triangles and 2^(N−1) times the boundary nodes.
-    restricted : bool
-        Paper planner restricted to some pairs (regions, separation range): the strain
-        responses are then checked by the planner itself once the pairs are known.
-    n_axes : int
-        Pads: grasp axes of the release landscape (a plan's grid; an optimize evaluates
-        part of its grid).
-    what : str, optional
-        What the messages start with (default ``--model <model>``).
-
-    Raises
-    ------
-    GraspError
-    """
-    loops = list(mesh.loops)
-    levels = int(refine) if isinstance(refine, Integral) and 1 <= refine <= 5 else 1
-    f, g = 4 ** (levels - 1), 2 ** (levels - 1)
-    if levels > 1 and mesh.n_triangles * f > MAX_TRIANGLES:
-        raise GraspError(f"--refine {levels}: the finest mesh would have about "
-                         f"{_fmt(mesh.n_triangles * f)} triangles (limit {MAX_TRIANGLES:,}); use "
-                         "fewer meshes or a larger mesh.max_area")
-    n_b = sum(len(lp) for lp in loops) * g
-    jaw = None
-    if model == "paper":
-        jaw = len(loops[0]) * g if mode == "contracting" else n_b
-    ell = area = 0.0
-    if model == "pads":
-        from .pads.limit import critical_distance_of
-
-        ell = critical_distance_of(mesh)
-        area = float(mesh.areas.sum())
-    # --refine keeps every level's solvers: about 4/3 of the finest mesh's
-    k = solvers * (4.0 / 3.0 if levels > 1 else 1.0)
-    return check_plan_size(n_b, model, n_nodes=mesh.n_nodes * f, n_triangles=mesh.n_triangles * f,
-                           n_jaw_nodes=jaw, area=area, ell=ell, solvers=k,
-                           plan=plan and not restricted, n_axes=n_axes, what=what)
 
 
 def check_strain_responses(n_jaw_nodes: int, n_nodes: int, n_triangles: int,

@@ -18,6 +18,7 @@ duplicate point and repeated consecutive points removed.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -28,9 +29,12 @@ from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 from shapely.geometry import LinearRing, Polygon
 
 from .choices import PLANES, choose
+from .drawing import (drawing_source, is_drawing_file, material_file_beside,
+                      material_path_beside, read_drawing)
 from .errors import DeformClosureError, PartError
 from .geometry import point_set_diameter, signed_area, touch_tolerance
 from .jsonfile import InputFile, Source
+from .limits import MAX_TRIANGLES, check_mesh_points, check_ring_gaps, points_within
 from .units import length_scale
 
 __all__ = [
@@ -39,19 +43,9 @@ __all__ = [
     "Part",
     "demo_part",
     "read_material",
+    "part_from_drawing",
     "MAX_TRIANGLES",
 ]
-
-
-def __getattr__(name: str) -> Any:
-    # MAX_TRIANGLES: the largest number of triangles a mesh may have, defined in
-    # :mod:`deformclosure.limits` (a higher layer, imported when used); a part file whose
-    # area / max_area alone exceeds it is refused on reading.
-    if name == "MAX_TRIANGLES":
-        from .limits import MAX_TRIANGLES
-
-        return MAX_TRIANGLES
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 #: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
@@ -432,9 +426,7 @@ class Part:
         material = Material.from_dict(data["material"], scale)
         outer, holes = _validate_geometry(outer, holes)
         diameter = point_set_diameter(outer)
-        from . import limits as _limits     # a higher layer: imported when used
-
-        _limits.check_ring_gaps(outer, holes, diameter, units=model.units, scale=scale)
+        check_ring_gaps(outer, holes, diameter, units=model.units, scale=scale)
         opts = _validate_mesh_options(model.mesh, scale, outer, holes, diameter)
         return cls(model.name, model.units, outer, holes, material, opts)
 
@@ -453,7 +445,6 @@ class Part:
         ------
         PartError
         """
-        from .drawing import is_drawing_file, part_from_drawing
         from .jsonfile import read_json
 
         if is_drawing_file(path):
@@ -572,9 +563,6 @@ def _validate_geometry(outer: np.ndarray, holes: tuple[np.ndarray, ...]
 
 def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
                            holes: tuple[np.ndarray, ...], diameter: float) -> MeshOptions:
-    from . import limits as _limits     # a higher layer: imported when used
-    from .limits import MAX_TRIANGLES
-
     poly = Polygon(outer, list(holes))
     if not (math.isfinite(m.min_angle) and 0.0 < m.min_angle <= 34.0):
         raise PartError(f"mesh.min_angle = {m.min_angle!r}: use 0 < min_angle <= 34 degrees "
@@ -590,11 +578,11 @@ def _validate_mesh_options(m: _MeshModel, scale: float, outer: np.ndarray,
                             f"triangles (limit {MAX_TRIANGLES:,}); increase max_area")
     if any(len(p) != 2 for p in m.points):
         raise PartError("mesh.points: every point must be a pair [x, y]")
-    _limits.check_mesh_points(len(m.points))
+    check_mesh_points(len(m.points))
     pts = check_coordinates(np.asarray(m.points, dtype=float).reshape(-1, 2), "mesh.points",
                             PartError) * scale
     if len(pts):
-        inside = _limits.points_within(poly, pts, touch_tolerance(diameter))  # indexed
+        inside = points_within(poly, pts, touch_tolerance(diameter))  # indexed
         if not inside.all():
             bad = int(np.flatnonzero(~inside)[0])
             raise PartError(f"mesh.points[{bad}]: point lies outside the part; move it onto or inside the part")
@@ -660,3 +648,92 @@ def notched_part(max_area_mm2: float = 0.4) -> Part:
                      "elastic_limit_strain": 0.8, "plane": "stress"},
         "mesh": {"max_area": max_area_mm2, "min_angle": 30},
     })
+
+
+def part_from_drawing(path: InputFile, material=None, units: str | None = None,
+                      layer: str | None = None, tolerance: float | None = None,
+                      mesh: dict | None = None, name: str | None = None,
+                      default_units: str | None = None, material_file: InputFile | None = None):
+    """A :class:`Part` from a drawing (its geometry read by :mod:`deformclosure.drawing`).
+
+    Parameters
+    ----------
+    path : path-like or Source
+        ``.dxf`` or ``.svg`` file, or its name and bytes
+        (:class:`~deformclosure.jsonfile.Source`).
+    material : Material, str, path-like or Source, optional
+        A material, or the text of ``--material`` (inline JSON or a JSON file; lengths in
+        the drawing's units unless it states its own). Default: from ``material_file``.
+    units, layer, tolerance, default_units
+        See :func:`read_drawing`.
+    mesh : dict, optional
+        Part-file mesh options (``max_area`` in units², ``min_angle``, ``points``); default
+        from ``material_file``, if it has a ``mesh`` block.
+    name : str, optional
+        Default: the file's stem.
+    material_file : path-like or Source, optional
+        The drawing's material file: a material object, optionally with ``units`` and a
+        ``mesh`` block. Default: :func:`material_file_beside` the drawing (a path only).
+
+    Raises
+    ------
+    PartError
+
+    Examples
+    --------
+    >>> from deformclosure.jsonfile import Source
+    >>> from deformclosure.part import part_from_drawing
+    >>> svg = (b'<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="10mm" '
+    ...        b'viewBox="0 0 20 10"><rect width="20" height="10"/>'
+    ...        b'<circle cx="10" cy="5" r="2"/></svg>')
+    >>> part = part_from_drawing(Source("plate.svg", svg), material='{"youngs_modulus": 2e6, '
+    ...     '"poisson_ratio": 0.1, "thickness": 1, "elastic_limit_strain": 0.8}')
+    >>> part.units, len(part.holes), round(part.area * 1e6)      # mm²
+    ('mm', 1, 188)
+    """
+    src = drawing_source(path)
+    drawing = read_drawing(src, units, layer, tolerance, default_units)
+    if isinstance(material, (str, os.PathLike, Source)):
+        material = read_material(material, drawing.units)
+    elif material is not None and not isinstance(material, Material):
+        raise PartError(f"material = {material!r}: give a Material, inline JSON or a "
+                        "material file")
+    if material is None or mesh is None:
+        side = material_file if material_file is not None else material_file_beside(path)
+        if side is not None:
+            material, mesh = _drawing_material_file(side, drawing.units, material, mesh)
+        elif material is None:
+            hint = "" if isinstance(path, Source) else \
+                f" or put it in {material_path_beside(Path(path)).name} beside the drawing"
+            raise PartError(f"{src.name}: a drawing has no material; give --material "
+                            f"FILE|JSON{hint}")
+    scale = length_scale(drawing.units)
+    mat = material.to_dict()
+    mat["thickness"] = material.thickness / scale
+    if material.critical_distance is not None:
+        mat["critical_distance"] = material.critical_distance / scale
+    data = {"name": name or Path(src.name).stem, "units": drawing.units,
+            "outer": drawing.outer.tolist(), "holes": [h.tolist() for h in drawing.holes],
+            "material": mat}
+    if mesh is not None:
+        data["mesh"] = mesh
+    part = Part.from_dict(data)
+    import dataclasses
+
+    return dataclasses.replace(part, material=material)
+
+
+def _drawing_material_file(side: InputFile, units: str, material, mesh):
+    """``(material, mesh)``, each kept if given, else from the material file ``side``
+    (lengths in the drawing's ``units`` unless it states its own)."""
+    import json
+
+    from .jsonfile import read_json
+
+    data = read_json(side if isinstance(side, Source) else Path(side), PartError, "material file")
+    if isinstance(data, dict) and mesh is None and isinstance(data.get("mesh"), dict):
+        mesh = data["mesh"]
+    if material is None:
+        blob = {k: v for k, v in data.items() if k != "mesh"} if isinstance(data, dict) else data
+        material = read_material(json.dumps(blob), units, str(side))
+    return material, mesh

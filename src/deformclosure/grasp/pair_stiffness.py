@@ -32,7 +32,7 @@ from ..geometry import touch_tolerance
 from .jaws import jaw_patches
 
 __all__ = ["PairStiffness", "pair_stiffness", "all_pairs", "pair_stiffness_paper",
-           "jaw_pair_forces", "PAIR_METHODS"]
+           "jaw_pair_forces", "wide_jaw_forces", "PAIR_METHODS"]
 
 #: How :func:`pair_stiffness` computes ``k_ab``: condensed compliance, or the paper's
 #: one Dirichlet solve per pair.
@@ -256,6 +256,16 @@ def _wide_jaw_stiffness(mesh, cc: CondensedCompliance, pairs: np.ndarray, e: np.
             node_sets[i] = J[r]
             forces[i] = lam[r]
     return k, node_sets, forces
+
+
+def wide_jaw_forces(mesh, cc: CondensedCompliance, pairs: np.ndarray, width: float
+                    ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """Stiffness, patch nodes and normal forces of flat jaws of ``width`` (m) at each of
+    ``pairs`` (node ids, (V, 2)): ``(k (N/m), node_sets, forces (N per m of approach))``,
+    as :func:`pair_stiffness` computes them for ``jaw_width > 0``.
+    """
+    e, _ = _unit(mesh.nodes, pairs)
+    return _wide_jaw_stiffness(mesh, cc, pairs, e, width)
 
 
 def jaw_pair_forces(mesh, cc: CondensedCompliance, a: int, b: int, width: float = 0.0

@@ -11,6 +11,7 @@ import triangle as tr
 import shapely
 from shapely.geometry import Polygon
 
+from .. import limits
 from ..errors import MeshError, PartError
 from ..geometry import touch_tolerance
 from ..part import Part
@@ -112,8 +113,6 @@ def _mesher_settings(part: Part, max_area: float | None, min_angle: float | None
                      points: np.ndarray | None) -> tuple[float, float, np.ndarray]:
     """Checked ``max_area`` (m²), ``min_angle`` (degrees) and the points to insert (m):
     the arguments, else the part's mesh options."""
-    from .. import limits    # a higher layer (L3): imported when used
-
     opts = part.mesh_options
     max_area = default_max_area(part) if max_area is None else float(max_area)
     if not (np.isfinite(max_area) and max_area > 0):
@@ -130,8 +129,6 @@ def _mesher_settings(part: Part, max_area: float | None, min_angle: float | None
 
 def _check_points_inside(part: Part, pts: np.ndarray, tol: float) -> None:
     """Refuse points outside the part by more than ``tol`` (m)."""
-    from .. import limits    # a higher layer (L3): imported when used
-
     if len(pts):
         outside = ~limits.points_within(part.polygon, pts, tol)  # indexed: no points × edges
         if outside.any():
@@ -157,8 +154,6 @@ def _triangulate(rings: list[np.ndarray], interior_pts: np.ndarray, holes: tuple
                  min_angle: float, max_area: float) -> tuple[np.ndarray, np.ndarray]:
     """Triangle's constrained quality triangulation of the rings (as segments) and the
     interior points: node coordinates (m) and triangles, unused input vertices dropped."""
-    from .. import limits    # a higher layer (L3): imported when used
-
     verts = np.concatenate(rings + [interior_pts])
     segs = []
     off = 0
@@ -226,8 +221,6 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
     >>> mesh.n_triangles > 12, mesh.find_node([0.0, 0.01]) in mesh.outer_loop
     (True, True)
     """
-    from .. import limits    # a higher layer (L3): imported when used
-
     opts = part.mesh_options
     from_file = max_area is None and opts.max_area is not None
     max_area, min_angle, pts = _mesher_settings(part, max_area, min_angle, points)

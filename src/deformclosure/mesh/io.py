@@ -27,7 +27,7 @@ from ..units import length_scale
 from .core import Mesh
 
 __all__ = ["MESH_FORMAT", "MATERIAL_FORMATS", "mesh_to_dict", "mesh_from_dict", "read_mesh",
-           "write_mesh", "is_mesh_file"]
+           "write_mesh", "is_mesh_file", "material_cell_data"]
 
 MESH_FORMAT = "deformclosure-mesh/1"
 
@@ -317,7 +317,10 @@ _MATERIAL_FIELDS = ("youngs_modulus", "poisson_ratio", "thickness", "elastic_lim
                     "plane_strain", "critical_distance")
 
 
-def _material_cell_data(material: Material, n: int) -> dict[str, list[np.ndarray]]:
+def material_cell_data(material: Material, n: int) -> dict[str, list[np.ndarray]]:
+    """The material as constant cell fields of ``n`` triangles (meshio ``cell_data``: one
+    list of one array per field of :data:`_MATERIAL_FIELDS`, SI; no critical distance is
+    NaN), as every mesh file we write carries it."""
     cd = material.critical_distance
     values = (material.youngs_modulus, material.poisson_ratio, material.thickness,
               material.elastic_limit_strain, float(material.plane == "strain"),
@@ -380,7 +383,7 @@ def write_mesh(mesh: Mesh, path: str | Path) -> bool:
     import meshio
 
     keep = mesh.material is not None and path.suffix.lower() in MATERIAL_FORMATS
-    cell_data = _material_cell_data(mesh.material, len(mesh.triangles)) if keep else None
+    cell_data = material_cell_data(mesh.material, len(mesh.triangles)) if keep else None
     try:
         with atomic_path(path) as tmp:
             meshio.write_points_cells(tmp, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),

@@ -22,8 +22,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from .. import graph_kernels
 from ..errors import GraspError
-from ..grasp import _kernels
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid
@@ -231,14 +231,14 @@ def _release_energies(A: sp.csr_matrix, E: np.ndarray, tau: np.ndarray) -> np.nd
     UA = np.zeros_like(E)
     for k in range(E.shape[1]):
         U = E[:, k]
-        nmin = _kernels.neighbour_min(A.indptr, A.indices, U)
+        nmin = graph_kernels.neighbour_min(A.indptr, A.indices, U)
         # Strict beyond the noise floor: every neighbour higher by more than tau × its energy.
         Umin_rel = np.full(V, np.inf)
         for v in range(V):
             nb = A.indices[A.indptr[v]:A.indptr[v + 1]]
             Umin_rel[v] = np.min(U[nb] - tau[k] * U[nb] - U[v])
         strict = (Umin_rel > 0) & (U > 0)      # zero energy: released, holds nothing
-        ua = _kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
+        ua = graph_kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
         ua[(ua > 0) & np.isfinite(ua) & (ua <= tau[k] * (U + ua))] = 0.0   # ties
         UA[:, k] = ua
     return UA

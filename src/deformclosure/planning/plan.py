@@ -65,7 +65,7 @@ from numba import njit
 from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
 from ..grasp import pieces as pc
-from ..grasp._kernels import _heap_pop, _heap_push, path_to
+from ..graph_kernels import heap_pop, heap_push, path_to
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.elastic_limit import elastic_limit_separation
 from ..grasp.release import release_energies
@@ -187,7 +187,7 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
               hk, hv, bseen, stack, epoch):  # pragma: no cover - compiled
     """Escape levels of start ``s`` at separation ``x``: ``(strict, B, B_stable, path)``.
 
-    The minimax search of :func:`deformclosure.grasp._kernels.bottleneck_escape` (a
+    The minimax search of :func:`deformclosure.graph_kernels.bottleneck_escape` (a
     path's cost is its largest vertex energy), with the energies computed on the fly so
     that its work is the explored basin, not the graph. ``B`` is the level of the first
     equilibrium ``e ≠ s`` it settles — the release level, ``U_A = B − U_s`` when ``s`` is
@@ -211,13 +211,13 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
     best[s] = us
     seen[s] = epoch
     pred[s] = -1
-    size = _heap_push(hk, hv, size, us, s)
+    size = heap_push(hk, hv, size, us, s)
     target = -1
     level = np.inf
     while size > 0:
         d = hk[0]
         v = hv[0]
-        size = _heap_pop(hk, hv, size)
+        size = heap_pop(hk, hv, size)
         if done[v] == epoch:
             continue
         done[v] = epoch
@@ -256,7 +256,7 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
                 seen[w] = epoch
                 best[w] = nd
                 pred[w] = v
-                size = _heap_push(hk, hv, size, nd, w)
+                size = heap_push(hk, hv, size, nd, w)
     return strict, first, level, path_to(pred, target)
 
 
@@ -741,10 +741,9 @@ def _max_pair_strains(T: np.ndarray, jaw_width: float, ptr: np.ndarray, pos: np.
 
 
 def _wide_forces(model: GraspModel, pairs: np.ndarray):
-    from ..grasp.pair_stiffness import _unit, _wide_jaw_stiffness
+    from ..grasp.pair_stiffness import wide_jaw_forces
 
-    e, _ = _unit(model.mesh.nodes, pairs)
-    _, sets, lam = _wide_jaw_stiffness(model.mesh, model.condensed, pairs, e, model.jaw_width)
+    _, sets, lam = wide_jaw_forces(model.mesh, model.condensed, pairs, model.jaw_width)
     return np.array(sets, dtype=object), np.array(lam, dtype=object)
 
 

@@ -45,7 +45,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     from ..dspace.closure import deform_closure
     from ..dspace.escape import release_energy_fingers
     from ..dspace.fingers import load_fingers
-    from ..limits import check_model_size
+    from ..pads.size_limits import check_pads_size
 
     p = params
     _check_params(p)
@@ -54,7 +54,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     inp = read_inputs(part, p["units"], p["material"],
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
-    check_model_size(inp.mesh, "pads", solvers=2 if inp.part is None else 3, what="check")
+    check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")
     res = deform_closure(inp.mesh, fingers)
     rel = release_energy_fingers(inp.mesh, fingers, part=inp.part, start=res.equilibrium,
                                  rigid_closed=res.deform_closure, n_translation=p["grid_steps"],

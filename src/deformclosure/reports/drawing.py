@@ -12,8 +12,9 @@ __all__ = ["run"]
 def run(part, params: dict, progress=None, notify=None) -> Report:
     """The part of the drawing ``part`` (``units``, ``layer``, ``tolerance`` in the
     drawing's units, ``material``); the report is the part file (SI: metres)."""
-    from ..drawing import is_drawing_file, part_from_drawing
+    from ..drawing import is_drawing_file
     from ..jsonfile import Source
+    from ..part import part_from_drawing
     from ..units import length_scale
 
     p = params

@@ -77,8 +77,8 @@ def unit_of(units: str | None, part) -> str:
 def read_part(src: Source, units: str | None = None, material=None):
     """The part of a part file or drawing, with ``--material`` (in ``units``, default the
     part's) replacing its own; returns ``(part, warnings)``."""
-    from ..drawing import is_drawing_file, part_from_drawing
-    from ..part import Part, read_material
+    from ..drawing import is_drawing_file
+    from ..part import Part, part_from_drawing, read_material
 
     if is_drawing_file(src):
         part = part_from_drawing(src, material=material, default_units=units)

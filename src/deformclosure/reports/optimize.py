@@ -57,13 +57,13 @@ def _axis_start(at, axis, scale: float):
 
 
 def _pads(part, p: dict, notify) -> Report:
-    from ..limits import check_model_size
     from ..pads import pad_grasp
+    from ..pads.size_limits import check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], p["material"])
-    check_model_size(inp.mesh, "pads", solvers=1 if inp.part is None else 2, refine=p["refine"],
-                     n_axes=p["grid_angles"] * p["grid_offsets"])
+    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2, refine=p["refine"],
+                    n_axes=p["grid_angles"] * p["grid_offsets"])
     scale = inp.scale
     ax = parse_axis(p["at"], p["axis"], scale)
     pad = pad_from_options(p["pad_radius"], p["pad_width"], scale, inp.mesh.diameter)
@@ -178,7 +178,7 @@ def _mesh_with_jaws(inp, pts, at):
 def _paper(part, p: dict) -> Report:
     """The paper's two-jaw model (SPEC §4), unchanged."""
     from ..grasp.analysis import grasp_model, optimize_separation
-    from ..limits import check_model_size
+    from ..grasp.size_limits import check_paper_size
 
     if (p["jaws"] is None) == (p["at"] is None):
         raise GraspError("jaws: give exactly one of --jaws A B (node ids) or --at X,Y X,Y (positions)")
@@ -186,7 +186,7 @@ def _paper(part, p: dict) -> Report:
     check_jaw_width(p["jaw_width"])
     inp, jaws = _paper_inputs(part, p)
     mesh, mode = inp.mesh, "expanding" if p["expanding"] else "contracting"
-    check_model_size(mesh, "paper", mode=mode)
+    check_paper_size(mesh, mode=mode)
     width = p["jaw_width"] * inp.scale
     if width > mesh.diameter:
         raise GraspError(f"--jaw-width = {p['jaw_width']:g} {inp.unit}: wider than the part "

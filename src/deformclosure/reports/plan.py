@@ -36,15 +36,15 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
 
 def _pads(part, p: dict, progress) -> Report:
-    from ..limits import check_model_size
     from ..pads import PadContact
     from ..pads.noise import twin_mesh
     from ..pads.plan import plan_pads
+    from ..pads.size_limits import check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"])
-    check_model_size(inp.mesh, "pads", solvers=1 if inp.part is None else 2,  # before the work
-                     n_axes=p["grid_angles"] * p["grid_offsets"])
+    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2,  # before the work
+                    n_axes=p["grid_angles"] * p["grid_offsets"])
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
@@ -124,7 +124,7 @@ def _restrictions(p: dict, scale: float):
 
 def _paper(part, p: dict, progress) -> Report:
     """The paper's planner over node pairs (SPEC §4), every pair within ε."""
-    from ..limits import check_model_size
+    from ..grasp.size_limits import check_paper_size
     from ..planning.plan import plan_grasps
 
     check_eps(p["eps"])
@@ -132,7 +132,7 @@ def _paper(part, p: dict, progress) -> Report:
     inp = read_inputs(part, p["units"])
     mode = "expanding" if p["expanding"] else "contracting"
     restricted = bool(p["region"]) or p["min_sep"] is not None or p["max_sep"] is not None
-    check_model_size(inp.mesh, "paper", mode=mode, plan=True, restricted=restricted)
+    check_paper_size(inp.mesh, mode=mode, plan=True, restricted=restricted)
     rng, boxes = _restrictions(p, inp.scale)
     res = plan_grasps(inp.mesh, eps=p["eps"], mode=mode, jaw_width=p["jaw_width"] * inp.scale,
                       separation_range=rng, regions=boxes or None, top=p["top"],

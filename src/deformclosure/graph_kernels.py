@@ -1,8 +1,13 @@
-"""Numba kernels of the release-energy searches (SPEC §4; paper §4.4).
+"""Numba kernels of the release-energy searches on a graph (SPEC §4; paper §4.4).
 
-Private: the public wrappers in :mod:`deformclosure.grasp.release` validate inputs.
-All kernels take the symmetric CSR adjacency ``(indptr, indices)`` of a contact graph
-and the vertex energies ``U`` (J). ``cache=True`` keeps the compiled code between runs.
+Shared by every model whose release landscape is a graph with vertex energies: the
+paper's contact graph (:mod:`deformclosure.grasp.release`, whose wrappers validate the
+inputs), the pads' axis grid (:mod:`deformclosure.pads.plan`) and the paper planner's
+lattice search (:mod:`deformclosure.planning.plan`, with the heap and the path). They sit
+below the models (mechanics layer, with ``landscape``), so no model imports another's.
+All kernels take the symmetric CSR adjacency ``(indptr, indices)`` of a graph and the
+vertex energies ``U`` (J); they do not check their inputs. ``cache=True`` keeps the
+compiled code between runs.
 """
 
 from __future__ import annotations
@@ -10,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["bottleneck_escape", "release_sweep", "neighbour_min"]
+__all__ = ["bottleneck_escape", "release_sweep", "neighbour_min", "path_to", "heap_push",
+           "heap_pop"]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -28,7 +34,7 @@ def _heap_put(keys, vals, i, key, val):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _heap_push(keys, vals, size, key, val):  # pragma: no cover - compiled
+def heap_push(keys, vals, size, key, val):  # pragma: no cover - compiled
     """Add ``(key, val)`` (sift up from the end); returns the new size."""
     i = size
     while i > 0:
@@ -42,7 +48,7 @@ def _heap_push(keys, vals, size, key, val):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _heap_pop(keys, vals, size):  # pragma: no cover - compiled
+def heap_pop(keys, vals, size):  # pragma: no cover - compiled
     """Remove the root (sift the last entry down); returns the new size (the root must
     be read before)."""
     size -= 1
@@ -104,12 +110,12 @@ def bottleneck_escape(indptr, indices, U, start):  # pragma: no cover - compiled
     hv = np.empty(cap, np.int64)
     size = 0
     best[start] = U[start]
-    size = _heap_push(hk, hv, size, U[start], start)
+    size = heap_push(hk, hv, size, U[start], start)
     target = -1
     while size > 0:
         d = hk[0]
         v = hv[0]
-        size = _heap_pop(hk, hv, size)
+        size = heap_pop(hk, hv, size)
         if done[v]:
             continue
         done[v] = True
@@ -132,7 +138,7 @@ def bottleneck_escape(indptr, indices, U, start):  # pragma: no cover - compiled
             if nd < best[w]:
                 best[w] = nd
                 pred[w] = v
-                size = _heap_push(hk, hv, size, nd, w)
+                size = heap_push(hk, hv, size, nd, w)
     if target < 0:
         return np.empty(0, np.int64)
     return path_to(pred, target)

@@ -1,0 +1,66 @@
+"""Resource limits of the pads model on a mesh (SPEC §6): ``optimize``, ``plan`` and
+``check``.
+
+The constants and the cost model are the foundation's (:mod:`deformclosure.limits`);
+this module reads what the pads model needs from a mesh — its boundary, its area and the
+material's critical distance
+(:func:`~deformclosure.elasticity.critical_distance.critical_distance_of`) — and asks
+:func:`~deformclosure.limits.check_plan_size` before the heavy work.
+"""
+
+from __future__ import annotations
+
+from numbers import Integral
+
+from ..elasticity.critical_distance import critical_distance_of
+from ..errors import GraspError
+from ..limits import MAX_TRIANGLES, check_plan_size, format_count
+
+__all__ = ["check_pads_size"]
+
+
+def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
+                    what: str | None = None) -> dict[str, float]:
+    """Refuse a pads analysis of ``mesh`` that exceeds the limits.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Its boundary ``loops``, ``n_nodes``, ``n_triangles``, element ``areas`` (m²),
+        ``diameter`` and ``material`` are read.
+    solvers : int
+        Factorised meshes held at once (2 with the noise-floor twin; ``check`` holds 3).
+    refine : int
+        ``--refine N`` (1..5): the finest of N meshes has about 4^(N−1) times the
+        triangles and 2^(N−1) times the boundary nodes.
+    n_axes : int
+        Grasp axes of the release landscape (a plan's grid; an optimize evaluates part
+        of its grid).
+    what : str, optional
+        What the messages start with (default ``--model pads``).
+
+    Returns
+    -------
+    dict
+        The memory estimate (bytes), see :func:`deformclosure.limits.estimate_model_bytes`.
+
+    Raises
+    ------
+    GraspError
+        Above :data:`~deformclosure.limits.MAX_BOUNDARY_NODES_PADS` boundary nodes,
+        :data:`~deformclosure.limits.MAX_AVERAGING_NONZEROS`, the memory budget, or (with
+        ``refine``) :data:`~deformclosure.limits.MAX_TRIANGLES` on the finest mesh.
+    """
+    levels = int(refine) if isinstance(refine, Integral) and 1 <= refine <= 5 else 1
+    f, g = 4 ** (levels - 1), 2 ** (levels - 1)
+    if levels > 1 and mesh.n_triangles * f > MAX_TRIANGLES:
+        raise GraspError(f"--refine {levels}: the finest mesh would have about "
+                         f"{format_count(mesh.n_triangles * f)} triangles (limit "
+                         f"{MAX_TRIANGLES:,}); use fewer meshes or a larger mesh.max_area")
+    n_b = sum(len(lp) for lp in mesh.loops) * g
+    # --refine keeps every level's solvers: about 4/3 of the finest mesh's
+    k = solvers * (4.0 / 3.0 if levels > 1 else 1.0)
+    return check_plan_size(n_b, "pads", n_nodes=mesh.n_nodes * f,
+                           n_triangles=mesh.n_triangles * f, area=float(mesh.areas.sum()),
+                           ell=critical_distance_of(mesh), solvers=k, plan=False,
+                           n_axes=n_axes, what=what)
