@@ -76,9 +76,6 @@ PENDING_CONTACT_REFACTOR: set[tuple[str, str]] = {
     ("dspace.escape", "pads.noise"),
     # dspace.fingers: the disc finger's pad flank angle (becomes a contact body).
     ("dspace.fingers", "pads"), ("dspace.fingers", "pads.geometry"),
-    # dspace.placement_energy: the compiled LCP kernel, private to contact.lcp (a public
-    # compiled entry of contact/ is to come with the one solver).
-    ("dspace.placement_energy", "contact.lcp._lcp"),
 }
 
 #: What ``import deformclosure`` alone must not load (issue 10): storage, process pools,

@@ -3,8 +3,8 @@
 
 Find ``λ ≥ 0`` with ``w = W λ + q ≥ 0`` and ``λᵀ w = 0`` for a symmetric positive
 definite Delassus matrix ``W`` (m/N) and gaps ``q`` (m): the dual of
-``min ½ uᵀ K u`` subject to the linearised gaps. The compiled kernel :func:`_lcp` is called
-from compiled callers (the placement energy's inner loop); :func:`solve_lcp` is its Python
+``min ½ uᵀ K u`` subject to the linearised gaps. The compiled kernel :func:`bpp_kernel` is
+called from compiled callers (the placement energy's inner loop); :func:`solve_lcp` is its Python
 entry, used through :func:`deformclosure.contact.solve.solve_contact`.
 
 References
@@ -20,11 +20,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["solve_lcp"]
+__all__ = ["solve_lcp", "bpp_kernel"]
 
 
 @njit(cache=True, nogil=True)
-def _lcp(W, q, free0):  # pragma: no cover - compiled
+def bpp_kernel(W, q, free0):  # pragma: no cover - compiled
     """Block principal pivoting for ``λ ≥ 0, w = Wλ + q ≥ 0, λᵀw = 0`` (W SPD).
 
     ``free0``: initial guess of the rows with ``λ > 0`` (warm start). Returns
@@ -124,5 +124,5 @@ def solve_lcp(W: np.ndarray, q: np.ndarray, warm: np.ndarray | None = None
     W = np.ascontiguousarray(W, dtype=float)
     q = np.ascontiguousarray(q, dtype=float)
     free0 = np.zeros(len(q), np.bool_) if warm is None else np.asarray(warm, np.bool_).copy()
-    lam, ok = _lcp(W, q, free0)
+    lam, ok = bpp_kernel(W, q, free0)
     return lam, bool(ok)

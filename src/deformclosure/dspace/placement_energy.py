@@ -78,7 +78,7 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
-from ..contact.lcp import _lcp
+from ..contact.lcp import bpp_kernel
 from .fingers import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
 from .placement import MAX_DEPTH_RATIO
@@ -514,7 +514,7 @@ def _solve_rows(R, sel, key, tol, warm, ypos, Y):  # pragma: no cover - compiled
             free0[r] = True
         elif q[r] < 0 and warm.shape[0] == 0:
             free0[r] = True
-    lam, ok = _lcp(W, q, free0)
+    lam, ok = bpp_kernel(W, q, free0)
     return lam, ok, W, dof, cf
 
 
