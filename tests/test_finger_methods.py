@@ -166,3 +166,36 @@ def test_fingers_built_in_code_are_checked_like_the_file_reader(finger, field):
     flat polygon is refused by every entry point (one line naming the field), never used."""
     with pytest.raises(FingerError, match=rf"fingers\[0\]\.{field}: "):
         as_fingers([finger])
+
+
+# ----------------------------------------------------------------------------- one profile
+@settings(max_examples=60, deadline=None)
+@given(st.floats(1e-4, 1e-2), st.floats(0.0, 2 * np.pi), st.floats(-0.5, 1.0),
+       st.floats(-0.99, 0.99))
+def test_compiled_disc_gap_is_the_capsule_profile(r, angle, s_frac, x_frac):
+    """The placement kernel's disc rows (compiled) use the same surface as the pads: the
+    gap along the disc's axis to ``Capsule(0, r).profile`` at the node's cross coordinate,
+    scaled to a unit gradient, and no contact beyond the capsule's reach (nodes in front
+    of the disc's back, ``s ≥ −r`` along its axis)."""
+    from deformclosure.contact.bodies import Capsule, DiscFinger
+    from deformclosure.dspace.placement_energy import _body_sd
+
+    a = np.array([np.cos(angle), np.sin(angle)])
+    n = np.array([-a[1], a[0]])
+    disc = DiscFinger((0.01, -0.02), r)
+    t, par, _, _ = disc.kernel_encoding(a)
+    shape = disc.shape
+    x = x_frac * shape.half_span
+    s = s_frac * 2 * r
+    p = np.asarray(disc.center) + s * a + x * n
+    empty2, empty1 = np.zeros((0, 2)), np.zeros(0)
+    g, nx, ny = _body_sd(t, par, 0, 0, empty2, empty2, empty1, p[0], p[1])
+    d, slope = shape.profile(np.array([x]))
+    if abs(x) >= shape.reach:
+        assert not np.isfinite(d[0]) and g == np.inf
+        return
+    # the disc's front surface at cross coordinate x lies r − d(x) ahead of its centre
+    gap_axis = s - (r - d[0])
+    norm = np.hypot(1.0, slope[0])
+    assert g == pytest.approx(gap_axis / norm, rel=1e-9, abs=1e-15)
+    assert np.hypot(nx, ny) == pytest.approx(1.0, abs=1e-12)

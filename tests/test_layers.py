@@ -74,8 +74,6 @@ PENDING_CONTACT_REFACTOR: set[tuple[str, str]] = {
     # release search (becomes landscape's one noise-floor rule).
     ("dspace.escape", "pads"), ("dspace.escape", "pads.contact"),
     ("dspace.escape", "pads.noise"),
-    # dspace.fingers: the disc finger's pad flank angle (becomes a contact body).
-    ("dspace.fingers", "pads"), ("dspace.fingers", "pads.geometry"),
 }
 
 #: What ``import deformclosure`` alone must not load (issue 10): storage, process pools,

@@ -53,8 +53,9 @@ _HOMES = {
     "optimize_separation": "grasp", "GraspAnalysis": "grasp",
     "plan_grasps": "planning.plan", "PlanResult": "planning.plan",
     # any finger set (SPEC §2, §3, §7)
-    "load_fingers": "dspace", "PointFinger": "dspace", "DiscFinger": "dspace",
-    "PolygonFinger": "dspace", "HalfPlaneFinger": "dspace", "Finger": "dspace",
+    "load_fingers": "dspace", "PointFinger": "contact.bodies", "DiscFinger": "contact.bodies",
+    "PolygonFinger": "contact.bodies", "HalfPlaneFinger": "contact.bodies",
+    "Finger": "contact.bodies",
     "deform_closure": "dspace", "dfree_slice": "dspace", "equilibrium": "dspace",
     "release_energy_fingers": "dspace", "FingerRelease": "dspace",
     # pads (SPEC §6)

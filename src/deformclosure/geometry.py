@@ -8,12 +8,31 @@ takes that tolerance from :func:`touch_tolerance`, and the diameter from
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["point_set_diameter", "signed_area", "touch_tolerance", "TOUCH_TOLERANCE"]
+__all__ = ["point_set_diameter", "signed_area", "touch_tolerance", "TOUCH_TOLERANCE",
+           "is_finite_number"]
 
 #: Contacts count as touching within this fraction of the part's diameter (SPEC §3).
 TOUCH_TOLERANCE = 1e-9
+
+
+def is_finite_number(value) -> bool:
+    """Whether ``value`` is one finite real number (not a string, an array or a bool).
+
+    Examples
+    --------
+    >>> is_finite_number(2.5), is_finite_number(True), is_finite_number(float("nan"))
+    (True, False, False)
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    try:
+        return math.isfinite(value)
+    except (TypeError, ValueError):
+        return False
 
 
 def touch_tolerance(diameter: float) -> float:

@@ -46,7 +46,7 @@ from .energy import as_configurations
 from .. import geometry
 from ..errors import DeformClosureError
 from ..geometry import TOUCH_TOLERANCE
-from .fingers import Finger, segment_distance
+from ..contact.bodies import Finger, segment_distance
 from .topology import DEFAULT_MIN_AREA_RATIO, in_dt, loop_edges
 
 __all__ = [

@@ -79,7 +79,7 @@ import numpy as np
 from numba import njit
 
 from ..contact.lcp import bpp_kernel
-from .fingers import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
+from ..contact.bodies import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
 from .placement import MAX_DEPTH_RATIO
 

@@ -25,84 +25,28 @@ along an edge ``s`` is linear and ``d`` convex in the edge parameter, so the min
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..contact.bodies import FLANK_ANGLE, Capsule
 from ..errors import GraspError
-from ..geometry import touch_tolerance
+from ..geometry import is_finite_number, touch_tolerance
 
 __all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "FLANK_ANGLE"]
 
-#: Steepest surface angle (rad, from the face) where pad contact is enforced.
-FLANK_ANGLE = np.radians(75.0)
-
-
-def _finite(value) -> bool:
-    """Whether ``value`` is one finite real number (not a string, an array or a bool)."""
-    if isinstance(value, (bool, np.bool_)):
-        return False
-    try:
-        return math.isfinite(value)
-    except (TypeError, ValueError):
-        return False
-
 
 @dataclass(frozen=True)
-class Pad:
-    """A rigid pad: flat face of width ``width`` (m) with rounded ends of ``radius`` (m).
+class Pad(Capsule):
+    """A rigid pad: flat face of width ``width`` (m) with rounded ends of ``radius`` (m) —
+    the capsule body of :class:`deformclosure.contact.bodies.Capsule` moving rigidly
+    along a grasp axis (its profile, reach and flank rule live there).
 
     Examples
     --------
     >>> Pad(width=0.004, radius=0.001).half_span   # W/2 + ρ: the widest point it touches
     0.003
     """
-
-    width: float
-    radius: float
-
-    def __post_init__(self) -> None:
-        if not (_finite(self.width) and self.width >= 0):
-            raise GraspError(f"pad width = {self.width!r}: must be a finite length >= 0 "
-                             "(0 = round fingertip)")
-        if not (_finite(self.radius) and self.radius > 0):
-            raise GraspError(f"pad radius = {self.radius!r}: must be a finite length > 0")
-
-    @property
-    def half_span(self) -> float:
-        """Largest ``|x|`` (m) the pad can touch: ``W/2 + ρ``."""
-        return 0.5 * self.width + self.radius
-
-    @property
-    def reach(self) -> float:
-        """Largest ``|x|`` (m) where contact is enforced: ``W/2 + ρ sin(FLANK_ANGLE)``."""
-        return 0.5 * self.width + self.radius * float(np.sin(FLANK_ANGLE))
-
-    def profile(self, x: np.ndarray, capped: bool = True) -> tuple[np.ndarray, np.ndarray]:
-        """Surface height ``d(x)`` (m) and slope ``d'(x)``; ``inf`` outside the pad.
-
-        Parameters
-        ----------
-        x : ndarray
-            Cross-axis coordinates relative to the axis (m).
-        capped : bool
-            Only the contact range ``|x| < reach`` (True) or the whole capsule
-            ``|x| < W/2 + ρ`` (False, for the rest geometry).
-        """
-        x = np.asarray(x, float)
-        xi = np.abs(x) - 0.5 * self.width
-        inside = np.abs(x) < (self.reach if capped else self.half_span)
-        xi_c = np.clip(xi, 0.0, self.radius)          # outside the pad the value is unused
-        root = np.sqrt(np.clip(self.radius**2 - xi_c**2, 0.0, None))
-        d = np.where(inside, self.radius - root, np.inf)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.where(inside & (xi > 0), np.sign(x) * xi_c / root, 0.0)
-        return d, np.where(inside, slope, np.inf)
-
-    def to_dict(self) -> dict[str, float]:
-        """``{"width", "radius"}`` in m."""
-        return {"width": float(self.width), "radius": float(self.radius)}
 
 
 @dataclass(frozen=True)
@@ -125,12 +69,12 @@ class GraspAxis:
     origin: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
-        if not (_finite(self.angle) and _finite(self.offset)):
+        if not (is_finite_number(self.angle) and is_finite_number(self.offset)):
             raise GraspError(f"axis = ({self.angle!r} rad, {self.offset!r} m): the angle and "
                              "offset must be finite numbers")
         o = self.origin
         if not (isinstance(o, (tuple, list, np.ndarray)) and len(o) == 2
-                and _finite(o[0]) and _finite(o[1])):
+                and is_finite_number(o[0]) and is_finite_number(o[1])):
             raise GraspError(f"axis origin = {o!r}: give a point (x, y) in m")
 
     @classmethod

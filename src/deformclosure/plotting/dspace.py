@@ -28,7 +28,7 @@ def plot_fingers(fingers: Sequence[Any], ax: Any = None, units: str = "m",
                  bounds: tuple[float, float, float, float] | None = None, labels: bool = True,
                  color: str = "0.35") -> Any:
     """Draw finger bodies (points as crosses, half-planes clipped to ``bounds``); each
-    finger draws itself (:meth:`deformclosure.dspace.fingers.Finger.plot`).
+    finger draws itself (:meth:`deformclosure.contact.bodies.Finger.plot`).
 
     Parameters
     ----------
