@@ -28,7 +28,7 @@ from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid
 from .limit import elastic_limit_strain_of, pad_elastic_limit
-from .optimize import UNITS, PadGraspResult, _check_counts, optimize_pads
+from .optimize import UNITS, _check_counts, optimize_pads
 
 __all__ = ["PadPlan", "plan_pads"]
 
@@ -278,7 +278,6 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
     grid anchored at each axis, twice the plan's angular resolution), updating them in
     place; stops at the first row that shows no barrier."""
     from ..mesh.generate import default_max_area
-    from .refine import pad_grasp
 
     area = default_max_area(part) if part is not None else None
     verified = []
