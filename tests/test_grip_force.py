@@ -20,6 +20,7 @@ import deformclosure as dc
 from deformclosure import reports
 from deformclosure.pads import GraspAxis, Pad
 from deformclosure.pads.contact import PadContact
+from deformclosure.pads.limit import pad_strain_at
 
 ROOT = Path(__file__).resolve().parents[1]
 MM = 1e-3
@@ -63,6 +64,8 @@ def test_uniform_compression_force_and_stiffness_exact(plane, mesh_case):
         assert F == pytest.approx(k_exact * delta, rel=1e-11)
         assert curve.axial_stiffness(sigma) == pytest.approx(k_exact, rel=1e-11)
         assert float(curve.energy(sigma)) == pytest.approx(0.5 * k_exact * delta**2, rel=1e-11)
+        # uniaxial stress: the strain measure (largest |principal strain|) is δ / L
+        assert pad_strain_at(pc, curve, sigma) == pytest.approx(frac, rel=1e-10)
 
 
 def test_force_is_minus_dU_dsigma_on_a_notched_part():
@@ -108,3 +111,16 @@ def test_optimize_report_carries_the_force(tmp_path):
     order = np.argsort(sig)
     assert np.all(np.diff(F[order]) <= 1e-12 * F.max())
     assert any("grip force" in line and " N " in line and "N/m" in line for line in rep.lines)
+
+
+def test_linear_runs_beyond_small_strain_warn(tmp_path):
+    """SPEC §8: a linear run whose strain at σ* exceeds 0.05 says so."""
+    raw = json.loads((ROOT / "examples" / "notched_bar.json").read_text())
+    raw["mesh"]["max_area"] = 1.0
+    part = tmp_path / "bar.json"
+    part.write_text(json.dumps(raw))
+    rep = reports.run("optimize", str(part), {"axis": "15,6,90", "pad_radius": 2.0,
+                                              "grid_angles": 12, "grid_offsets": 16})
+    e = rep.data["strain_at_sigma_star"]
+    assert e > 0.05 and rep.data["elasticity"] == "linear"
+    assert any("outside its range" in w and f"{e:.3g}" in w for w in rep.warnings)

@@ -17,7 +17,12 @@ from ..errors import GraspError
 from ..landscape.limit import first_limit_crossing, strain_measure
 from .contact import GraspCurve, PadContact
 
-__all__ = ["PadLimit", "pad_elastic_limit", "critical_distance_of", "elastic_limit_strain_of"]
+__all__ = ["PadLimit", "pad_elastic_limit", "pad_strain_at", "critical_distance_of",
+           "elastic_limit_strain_of", "LINEAR_STRAIN_RANGE"]
+
+#: Strain up to which small-strain linear elasticity is trusted (SPEC §8): a linear run
+#: whose strain at σ* exceeds it warns.
+LINEAR_STRAIN_RANGE = 0.05
 
 
 def elastic_limit_strain_of(mesh) -> float:
@@ -95,3 +100,19 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     Tbar, T = hit.interpolate(Ebar), hit.interpolate(E)
     return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell,
                     int(np.argmax(strain_measure(Tbar))), e_bp, float(strain_measure(T).max()))
+
+
+def pad_strain_at(solver: PadContact, curve: GraspCurve, sigma: float,
+                  ell: float | None = None) -> float:
+    """The strain measure of SPEC §6 (critical-distance average, largest absolute
+    principal value, maximised over the elements) at separation ``sigma`` (m)."""
+    if curve.path is None:
+        return 0.0
+    mesh = solver.mesh
+    ell = critical_distance_of(mesh) if ell is None else ell
+    lam = curve.path.multipliers(curve.delta(sigma))
+    u = solver.displacement(solver.load_vector(curve, lam))
+    E = solver.element_strains(u[:, None])[0]
+    Ebar = averaged_strains(mesh, E, None, operator=solver.averaging_operator(ell))
+    return float(strain_measure(Ebar).max(initial=0.0))
+

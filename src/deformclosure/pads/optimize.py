@@ -24,7 +24,8 @@ from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid, Landscape, Release
 from .noise import jitter_noise
-from .limit import PadLimit, elastic_limit_strain_of, pad_elastic_limit
+from .limit import (LINEAR_STRAIN_RANGE, PadLimit, elastic_limit_strain_of,
+                    pad_elastic_limit, pad_strain_at)
 
 __all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
 
@@ -66,6 +67,10 @@ class PadGraspResult:
         grasp the growth of the force with the opening).
     n_axes : int
         Number of axes whose contact problem was solved.
+    strain_at_sigma_star : float or None
+        The strain measure of SPEC §6 at σ* (dimensionless); above
+        :data:`~deformclosure.pads.limit.LINEAR_STRAIN_RANGE` a warning says that linear
+        elasticity is outside its range (SPEC §8).
     """
 
     axis: GraspAxis
@@ -87,6 +92,7 @@ class PadGraspResult:
     start_curve: GraspCurve = field(repr=False)
     n_nodes: int = 0
     e_L: float | None = None
+    strain_at_sigma_star: float | None = None
     warnings: tuple[str, ...] = ()
     solver: PadContact | None = field(default=None, repr=False, compare=False)
 
@@ -143,6 +149,8 @@ class PadGraspResult:
             "noise_floor_relative": self.noise_relative,
             "critical_distance": self.limit.critical_distance,
             "e_L": self.e_L,
+            "strain_at_sigma_star": self.strain_at_sigma_star,
+            "elasticity": "linear",
             "mode": "expanding" if self.start_curve.expanding else "contracting",
             "warnings": list(self.warnings),
             "escape_path": [ax.to_dict() for ax in self.escape_path],
@@ -274,6 +282,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     rel = e_star.release
     path = [grid.axis(v) for v in rel.path] if rel.strict and math.isfinite(rel.U_A) else []
     contacts = np.array([start_curve.touch.contact_a, start_curve.touch.contact_b])
+    strain = (None if sigma_star is None
+              else pad_strain_at(solver, start_curve, sigma_star, limit.critical_distance))
     return PadGraspResult(
         axis=GraspAxis(axis.angle, axis.offset, axis.origin), pad=pad, contacts=contacts,
         sigma0=sigma0, sigma_L=sigma_L, sigma_star=sigma_star,
@@ -283,7 +293,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=e_L,
-        warnings=_resolution_warnings(mesh, pad, hole), solver=solver)
+        strain_at_sigma_star=strain,
+        warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain), solver=solver)
 
 
 def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: GraspCurve,
@@ -354,6 +365,15 @@ def _noise_floor(land: Landscape, start: GraspAxis, twin: PadContact | None,
     if twin is not None and (hole is None or twin_hole is not None):
         land.twin = Landscape(twin, land.pad, grid, land.sigma_end, twin_hole)
     return lambda sig: max(jitter(sig), land.noise(sig))
+
+
+def _range_warnings(strain: float | None) -> tuple[str, ...]:
+    """A warning when the strain at σ* is beyond small strain (SPEC §8)."""
+    if strain is not None and strain > LINEAR_STRAIN_RANGE:
+        return (f"the strain at sigma* is {strain:.3g} (> {LINEAR_STRAIN_RANGE}): linear "
+                "elasticity is outside its range there, so sigma* and Q* are first-order "
+                "estimates (SPEC §8; --elasticity neo-hookean is not available yet)",)
+    return ()
 
 
 def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:

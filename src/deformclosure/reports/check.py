@@ -51,7 +51,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     _check_params(p)
     fsrc = source_of(p["fingers"], "finger file")
     fingers = load_fingers(fsrc)
-    inp = read_inputs(part, p["units"], p["material"],
+    inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
     check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")

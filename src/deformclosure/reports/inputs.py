@@ -90,9 +90,12 @@ def read_part(src: Source, units: str | None = None, material=None):
 
 
 def read_inputs(file: Any, units: str | None = None, material: Any = None, *,
-                points=None, need_material: bool = True, mesh: bool = True) -> Inputs:
+                points=None, need_material: bool = True, mesh: bool = True,
+                max_area: float | None = None) -> Inputs:
     """Read a part file (meshed with ``points`` (m) inserted as nodes), a drawing, or a
-    mesh file; ``--units`` and ``--material`` as on the command line.
+    mesh file; ``--units``, ``--material`` and ``--max-area`` (the part's units², the
+    starting mesh of every command: the part's ``mesh.max_area`` replaced, so refinement
+    and twin meshes start there too) as on the command line.
 
     ``points`` may be a callable ``points(part)`` returning the points, for commands whose
     points depend on the part (``check``). ``mesh=False`` reads the part without meshing.
@@ -108,15 +111,39 @@ def read_inputs(file: Any, units: str | None = None, material: Any = None, *,
     mat = material_of(material)
     sources = [src, src.sidecar] + ([mat] if isinstance(mat, Source) else [])
     if is_mesh_file(src):
+        if max_area is not None:
+            raise DeformClosureError("--max-area: applies to part files and drawings only; a "
+                                     "mesh file is used as it is")
         m = None if mat is None else read_material(mat, units or "m")
         msh = read_mesh(src, units=units or "m", material=m)
         if need_material and msh.material is None:
             raise DeformClosureError(f"{src.name}: {_NO_MATERIAL}")
         return Inputs(None, msh, units or "m", sources)
     part, warnings = read_part(src, units, mat)
+    if max_area is not None:
+        part = with_max_area(part, max_area, units)
     pts = points(part) if callable(points) else points
     msh = mesh_part(part, points=pts) if mesh else None
     return Inputs(part, msh, unit_of(units, part), sources, warnings)
+
+
+def with_max_area(part, max_area: Any, units: str | None):
+    """``part`` with its ``mesh.max_area`` replaced by ``--max-area`` (in ``units``², default
+    the part's units); a one-line error unless it is a finite area > 0."""
+    import dataclasses
+
+    from ..units import length_scale
+
+    try:
+        value = float(max_area)
+    except (TypeError, ValueError):
+        raise DeformClosureError(f"--max-area: expected an area, got {max_area!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise DeformClosureError(f"--max-area = {max_area!r}: must be a finite area > 0 "
+                                 f"(in {units or part.units}²)")
+    s = length_scale(units or part.units)
+    opts = dataclasses.replace(part.mesh_options, max_area=value * s * s)
+    return dataclasses.replace(part, mesh_options=opts)
 
 
 def parse_xy(text: Any, field_name: str) -> tuple[float, float]:

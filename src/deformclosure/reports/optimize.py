@@ -61,7 +61,7 @@ def _pads(part, p: dict, notify) -> Report:
     from ..pads.size_limits import check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])
-    inp = read_inputs(part, p["units"], p["material"])
+    inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2, refine=p["refine"],
                     n_axes=p["grid_angles"] * p["grid_offsets"])
     scale = inp.scale
@@ -141,7 +141,8 @@ def _pads_writer(inp):
 def _paper_inputs(part, p: dict):
     """The mesh with the --at points inserted as nodes, the jaw nodes, and the inputs."""
     at = p["at"]
-    inp = read_inputs(part, p["units"], p["material"], mesh=False)   # a mesh file: its mesh
+    inp = read_inputs(part, p["units"], p["material"], mesh=False,   # a mesh file: its mesh
+                      max_area=p["max_area"])
     pts = None if not at else np.array([parse_xy(v, "--at") for v in at]) * inp.scale
     if inp.part is not None:
         _check_near(inp, pts, at)

@@ -106,6 +106,9 @@ _MATERIAL = Opt("material", ("--material",), "str", role="file_or_json", metavar
                 help="Material replacing the input's (needed for mesh files without one): a "
                      "JSON file or inline JSON with youngs_modulus (Pa), poisson_ratio, "
                      "thickness, elastic_limit_strain [, plane, critical_distance, units].")
+_MAX_AREA = Opt("max_area", ("--max-area",), "float",
+                help="Largest triangle area of the starting mesh, in the part's units² "
+                     "(overrides the part's mesh.max_area; part files and drawings only).")
 _UNITS = Opt("units", ("--units",), "str",
              help="Unit of the lengths given here and of a meshio file's coordinates (m, cm, "
                   "mm, in; default: the part file's units, m for mesh files).")
@@ -168,7 +171,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
                  "mid-point or the --axis point)."),
         Opt("jaw_width", ("--jaw-width",), "float", 0.0, show_default=True,
             help="paper model: jaw contact width (0 = point jaws)."),
-        _MATERIAL, _UNITS,
+        _MATERIAL, _UNITS, _MAX_AREA,
         Opt("output", ("-o", "--output"), "file", role="output", help="JSON report (SI units)."),
         Opt("plot", ("--plot",), "folder", role="output", help="Folder for the plots."),
         Opt("export_graph", ("--export-graph",), "file", role="output",
@@ -192,7 +195,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("export_fields", _FIELDS, "file", role="output",
             help="Write the fields at the equilibrium to FILE.vtu for ParaView: deformed "
                  "mesh, displacement, strain, contact pressure."),
-        _MATERIAL, _UNITS,
+        _MATERIAL, _UNITS, _MAX_AREA,
         *_DISPLAY,
     ),
     "slice": (
@@ -213,7 +216,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("export_fields", _FIELDS, "file", role="output",
             help="Write the slice as an image for ParaView (.vtu): energy, D_free, D_T and "
                  "each D-obstacle over the positions of the moving node."),
-        _MATERIAL,
+        _MATERIAL, _MAX_AREA,
         *_DISPLAY,
     ),
     "plan": (
@@ -239,6 +242,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("region", ("--region",), "str", multiple=True, metavar="X0,Y0,X1,Y1",
             help="Allowed box for both jaws (repeatable; union), in --units."),
         Opt("units", ("--units",), "str", help="Unit of lengths given here (m, cm, mm, in)."),
+        _MAX_AREA,
         Opt("output", ("-o", "--output"), "file", role="output", help="JSON report (SI units)."),
         Opt("plot", ("--plot",), "folder", role="output",
             help="Folder for the quality map and top grasps."),

@@ -42,7 +42,7 @@ def _pads(part, p: dict, progress) -> Report:
     from ..pads.size_limits import check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])
-    inp = read_inputs(part, p["units"])
+    inp = read_inputs(part, p["units"], max_area=p["max_area"])
     check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2,  # before the work
                     n_axes=p["grid_angles"] * p["grid_offsets"])
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
@@ -129,7 +129,7 @@ def _paper(part, p: dict, progress) -> Report:
 
     check_eps(p["eps"])
     check_jaw_width(p["jaw_width"])
-    inp = read_inputs(part, p["units"])
+    inp = read_inputs(part, p["units"], max_area=p["max_area"])
     mode = "expanding" if p["expanding"] else "contracting"
     restricted = bool(p["region"]) or p["min_sep"] is not None or p["max_sep"] is not None
     check_paper_size(inp.mesh, mode=mode, plan=True, restricted=restricted)

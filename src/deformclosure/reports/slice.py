@@ -51,7 +51,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     out = p["output"]
     check_slice_size(p["resolution"], len(fingers),      # before the part is even meshed
                      json_output=bool(out) and str(out).lower().endswith(".json"))
-    inp = read_inputs(part, p["units"], p["material"])
+    inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     inp.sources.insert(1, fsrc)
     node = _node(inp.mesh, p["node"], p["at"], inp.scale)
     ext = _extent(inp.mesh, p["extent"], inp.scale)
