@@ -2,13 +2,10 @@
 
 ``U_A(σ)`` is the minimax barrier on the axis landscape (:mod:`.landscape`), ``U_L(σ) =
 U(σ_L) − U(σ)`` with ``σ_L`` from the critical-distance strain (:mod:`.limit`). Every
-vertex energy is an exact piecewise quadratic in σ, so between two separations where the
-escape runs over the same saddle axis ``w``, ``U_A = U_w − U_s`` is piecewise quadratic
-with the kinks of ``U_w`` and ``U_s``; on each such piece ``Q`` is maximised in closed form
-(ends, stationary points, crossings of ``U_A`` with ``U_L``) and the candidate is then
-checked against ``U_A`` evaluated by its definition. Where the saddle changes, the
-interval is bisected to ``1e-7 σ0``. This is §4's exact algorithm carried over to curves
-with several pieces; ``U_A`` can jump where the saddle or the set of equilibria changes.
+vertex energy is an exact piecewise quadratic in σ, and σ* is found by the one σ*-search
+over piecewise-quadratic curves, :func:`deformclosure.landscape.optimum.maximise_quality`
+(closed form per piece, candidates checked by definition, bisection where the saddle
+changes; ``U_A`` can jump there).
 """
 
 from __future__ import annotations
@@ -22,6 +19,7 @@ import numpy as np
 from ..errors import GraspError
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
+from ..landscape.optimum import maximise_quality
 from .landscape import AxisGrid, Landscape, Release
 from .noise import jitter_noise
 from .limit import (LINEAR_STRAIN_RANGE, PadLimit, elastic_limit_strain_of,
@@ -183,32 +181,6 @@ class _Eval:
         r = self.release
         return (r.strict, r.saddle if r.strict and math.isfinite(r.U_A) else None,
                 math.isinf(r.U_A))
-
-
-def _quadratic(f, lo: float, hi: float) -> np.ndarray:
-    """Coefficients ``[a, b, c]`` of the quadratic through ``f`` at lo, mid, hi, in ``x − lo``."""
-    h = hi - lo
-    f0, f1, f2 = f(lo), f(lo + 0.5 * h), f(hi)
-    return np.array([2.0 * (f2 - 2.0 * f1 + f0) / h**2, (4.0 * f1 - f2 - 3.0 * f0) / h, f0])
-
-
-def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
-    """Candidates for ``argmax min(fa, fb)`` on ``[lo, hi]``; fa, fb exact quadratics there."""
-    out = [lo, hi]
-    if hi - lo <= 0:
-        return out
-    coefs = [_quadratic(f, lo, hi) for f in (fa, fb)]
-    for a, b, _ in coefs:
-        if a < 0:
-            x = lo - b / (2 * a)
-            if lo < x < hi:
-                out.append(float(x))
-    diff = coefs[0] - coefs[1]
-    if np.any(diff):
-        for r in np.roots(diff):
-            if abs(r.imag) <= 1e-12 * (hi - lo) and 0 < r.real < hi - lo:
-                out.append(float(lo + r.real))
-    return out
 
 
 def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
@@ -390,74 +362,19 @@ def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:
 
 def _search_sigma_star(land: Landscape, s: int, Us, U_sL: float, sigma_L: float,
                        sigma0: float, tau, n_samples: int):
-    """Exact ``argmax Q`` on ``[σ_L, σ0]`` (module docstring); returns ``(best, ev)``.
+    """Exact ``argmax Q`` on ``[σ_L, σ0]`` by the one σ*-search
+    (:func:`deformclosure.landscape.optimum.maximise_quality`) on this axis landscape;
+    returns ``(best, ev)``: ``best`` is ``(Q*, σ*)`` or ``None`` when ``Q ≡ 0``, ``ev(σ)``
+    evaluates by definition."""
+    def evaluate(sig: float) -> _Eval:
+        return _Eval(sig, land.release(s, sig, tau(sig)), U_sL - float(Us(sig)))
 
-    ``best`` is ``(Q*, σ*)`` or ``None`` when ``Q ≡ 0``; ``ev(σ)`` evaluates by definition.
-    """
-    tol = 1e-7 * sigma0
-    evals: dict[float, _Eval] = {}
+    def saddle_curve(w: int):
+        c = land.curve(w)
+        return c.energy_at, c.kinks()
 
-    def ev(sig: float) -> _Eval:
-        if sig not in evals:
-            evals[sig] = _Eval(sig, land.release(s, sig, tau(sig)), U_sL - float(Us(sig)))
-        return evals[sig]
-
-    def UL(x: float) -> float:
-        return U_sL - float(Us(x))
-
-    kinks = land.curve(s).kinks()
-    lo, hi = min(sigma_L, sigma0), max(sigma_L, sigma0)
-    xs = sorted(set(np.linspace(lo, hi, n_samples).tolist())
-                | set(k for k in kinks.tolist() if lo < k < hi))
-    best: tuple[float, float] | None = None   # (Q, σ)
-    closer = 1.0 if sigma0 >= sigma_L else -1.0  # on ties, the least squeeze (nearer σ0)
-
-    def consider(sig: float, Q: float) -> None:
-        nonlocal best
-        if Q > 0 and (best is None or Q > best[0]
-                      or (Q == best[0] and closer * sig > closer * best[1])):
-            best = (Q, sig)
-
-    for x in xs:
-        consider(x, ev(x).Q)
-    stack = list(zip(xs[:-1], xs[1:]))
-    guard = 0
-    while stack and guard < 20000:
-        guard += 1
-        a, b = stack.pop()
-        ea, eb = ev(a), ev(b)
-        if ea.key != eb.key:                  # the saddle or the class changes inside
-            if b - a > tol:
-                m = 0.5 * (a + b)
-                consider(m, ev(m).Q)
-                stack += [(a, m), (m, b)]
-            continue
-        strict, w, infinite = ea.key
-        if not strict or infinite:
-            continue        # Q ≡ 0, or Q = U_L (increasing in σ): the ends suffice
-        Uw = land.curve(w).energy_at
-
-        def UA(x: float) -> float:
-            return float(Uw(x)) - float(Us(x))
-
-        cuts = np.concatenate([land.curve(w).kinks(), kinks])
-        cuts = np.unique(np.concatenate([[a, b], cuts[(cuts > a) & (cuts < b)]]))
-        for lo, hi in zip(cuts[:-1], cuts[1:]):
-            split = False
-            for x in _quadratic_max_min(UA, UL, lo, hi):
-                Qp = min(UA(x), UL(x))
-                if best is not None and Qp <= best[0]:
-                    continue
-                e = ev(x)
-                if e.key == ea.key and abs(e.Q - Qp) <= 1e-9 * max(abs(Qp), 1e-300):
-                    consider(x, e.Q)
-                elif x not in (a, b) and b - a > tol:
-                    stack += [(a, x), (x, b)]     # the piece assumption failed: split
-                    split = True
-                    break
-            if split:
-                break
-    return best, ev
+    return maximise_quality(evaluate, Us, land.curve(s).kinks(), saddle_curve, U_sL,
+                            sigma_L, sigma0, n_samples)
 
 
 def _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n, sigma_star, force) -> dict:
