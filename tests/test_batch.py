@@ -396,3 +396,18 @@ def test_result_summary_of_each_report_kind():
     assert format_results([]) == "no jobs"
     with pytest.raises(BatchError, match="choose 'table', 'csv' or 'json'"):
         format_results([row], "xml")
+
+
+def test_pad_plan_summaries_take_only_verified_rows():
+    """A screened row is a candidate (SPEC §6 "Plan"): batch summaries show the best
+    *verified* axis and its verdict, and nothing when no row was verified."""
+    from deformclosure.batch.results import result_summary
+
+    screened = {"angle": 0.1, "point": [0.0, 0.0], "sigma_star": 0.01, "quality": 9e-4,
+                "verified": False, "verdict": "candidate"}
+    verified = {"angle": 1.5, "point": [0.01, 0.0], "sigma_star": 0.008, "quality": 2e-4,
+                "verified": True, "verdict": "held"}
+    s = result_summary({"model": "pads", "axes": [screened, verified]})
+    assert s["top_quality"] == 2e-4 and s["top_verdict"] == "held" and s["top_angle"] == 1.5
+    s = result_summary({"model": "pads", "axes": [screened]})
+    assert "top_quality" not in s and s["n_axes"] == 1
