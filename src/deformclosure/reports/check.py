@@ -134,7 +134,7 @@ def _joules(v: float) -> str:
 
 def _target(rel) -> str:
     if rel.U_A_infinite:
-        return "impossible within the fingers' reach (a cage)"
+        return "impossible within the fingers' reach" + (" (a cage)" if rel.caged else "")
     if not rel.complete:
         return "search stopped (U_A is a lower bound)"
     return {"released": "to a released placement", "equilibrium": "to another equilibrium"}.get(
@@ -142,6 +142,9 @@ def _target(rel) -> str:
 
 
 def _verdict(rel) -> str:
+    if rel.deform_closure and rel.by_theorem1:
+        return ("HELD (deform closure at rest: the rigid part is in form closure, so every exit "
+                "deforms it and U_A > 0, Thm 1)")
     if rel.deform_closure:
         return "HELD (deform closure: U_A exceeds its error)"
     if rel.caged:
