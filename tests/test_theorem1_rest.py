@@ -446,6 +446,9 @@ def test_check_at_rest_is_theorem1(name):
         assert d["order"] == order
     assert d["deform_closure"] == d["rigid_closure"], text
     _assert_consistent(d, text)
+    unresolved = (d["release"]["closure_rule"] == "thm1_at_rest" and not d["U_A_infinite"]
+                  and d["U_A"] <= d["U_A_error"])
+    assert any("within its error estimate" in w for w in rep.warnings) == unresolved
 
 
 def _assert_consistent(d, text):
