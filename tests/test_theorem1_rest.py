@@ -156,27 +156,37 @@ def _gap2(t, rf, rp):
     return (rp - t) * (t + rf) / (rp + rf)
 
 
-def rigid_verdict(contacts):
-    """Independent form-closure test: ``(closed, order)``."""
+def first_order(contacts):
+    """First-order rigid test: ``"held"``, ``"escapes"`` or the centre ``c0`` (mm) of the
+    one rotation that keeps every gap (second order needed)."""
     if not contacts:
-        return False, 1
-    W = np.array([[c.n[0], c.n[1], _cross(c.p, c.n)] for c in contacts])
+        return "escapes"
+    W = np.array([[c.n[0], c.n[1], _cross(c.p, c.n)] for c in contacts])   # gap rates
     L = max(np.abs(np.array([c.p for c in contacts])).max(), 1.0)
     Ws = W * np.array([1.0, 1.0, 1.0 / L])                # twist (v, ω L): well scaled
-    # first order: maximise Σ gap rates over Wξ ≥ 0, |ξ| ≤ 1
+    # maximise Σ gap rates over Wξ ≥ 0, |ξ| ≤ 1
     lp = linprog(-Ws.sum(axis=0), A_ub=-Ws, b_ub=np.zeros(len(W)), bounds=[(-1, 1)] * 3, method="highs")
     assert lp.status == 0
     if -lp.fun > 1e-7:
-        return False, 1                                    # a twist separates a contact
+        return "escapes"                                   # a twist separates a contact
     _, sv, Vt = np.linalg.svd(Ws)
     rank = int(np.sum(sv > 1e-9 * sv[0]))
     if rank == 3:
-        return True, 1
+        return "held"
     N = Vt[rank:]                                          # twists keeping every gap
     if len(N) > 1 or abs(N[0][2]) < 1e-9:
-        return False, 1                                    # a translation keeps the gaps
-    xi = N[0] / N[0][2] * np.array([1.0, 1.0, L])          # ω = 1, v of the origin (mm/rad)
-    c0 = np.array([-xi[1], xi[0]])                         # the centre of that rotation
+        return "escapes"                                   # a translation keeps the gaps
+    v = N[0][:2] * L / N[0][2]                             # ω = 1: velocity of the origin (mm/rad)
+    return np.array([-v[1], v[0]])                         # v = ω ẑ × (0 − c0)
+
+
+def rigid_verdict(contacts):
+    """Independent form-closure test: ``(closed, order)``."""
+    c0 = first_order(contacts)
+    if isinstance(c0, str):
+        return c0 == "held", 1
+    W = np.array([[c.n[0], c.n[1], _cross(c.p, c.n)] for c in contacts])
+    Ws = W * np.array([1.0, 1.0, 1.0 / max(np.abs(np.array([c.p for c in contacts])).max(), 1.0)])
     h = np.array([_gap2(float((c0 - c.p) @ c.n), c.rf, c.rp) for c in contacts])
     # second order: is there a twist a with W a ≥ h (θ² = 2)? Margin s of the best one
     A = np.hstack([-Ws, np.ones((len(W), 1))])
@@ -427,6 +437,27 @@ def test_independent_rigid_test_on_hand_cases():
     assert _independent("issue: 12 x 20 block, 4-disc pinwheel") == (True, 1)
     assert _independent("block, 4-disc pinwheel turned the wrong way") == (False, 1)
     assert _independent("issue: star, 5 points in the notches") == (True, 1)
+
+
+def test_independent_rotation_centre():
+    """Where the normals meet: the centre of the block, and an off-centre point."""
+    for name, c0 in (("block, 4 mid-side points", (6, 10)), ("block, 4 discs with normals meeting off-centre", (3, 5)),
+                     ("hexagon, 3 mid-edge points", (0, 0))):
+        outer, fingers, _ = CASES[name]
+        assert np.allclose(first_order(rigid_contacts(outer, fingers)), c0, atol=1e-9), name
+
+
+def test_second_order_gap_is_the_exact_gap_to_second_order():
+    """``_gap2`` against the distance of the two circles under a small finite rotation."""
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        t, rf, rp = rng.uniform(-5, 5), rng.uniform(0, 3), rng.uniform(0.1, 4)
+        th = 1e-4
+        n = np.array([0.0, 1.0])
+        a, b, c = rp * n, -rf * n, t * n                   # part centre, finger centre, pivot (p = 0)
+        R = np.array([[math.cos(-th), -math.sin(-th)], [math.sin(-th), math.cos(-th)]])
+        gap = np.linalg.norm(c + R @ (b - c) - a) - (rp + rf)
+        assert gap == pytest.approx(-_gap2(t, rf, rp) * th ** 2 / 2, rel=1e-3, abs=1e-14)
 
 
 def _params():
