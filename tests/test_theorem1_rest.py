@@ -320,10 +320,12 @@ PENT = ngon(5, 9.0, 0.3)
 
 #: name: (outer (mm), fingers (finger-file dicts, mm), mesh max_area (mm²))
 CASES = {
-    # ---- the two sets of the issue
+    # ---- held at first order. "issue:" — the kinds of issue 19: before the fix the
+    # pinwheel printed U_A = 0 J ± 0.615 mJ (noise floor 155 %) with rigid_closure true;
+    # the 5-finger star "issue: star, 2 notch points + 3 edge discs" (below) gave
+    # U_A = 0.0155 mJ with deform_closure false
     "issue: 12 x 20 block, 4-disc pinwheel": (B, pinwheel(12, 20, 2.0, 3.0, 5.0), 4.0),
-    "issue: star, 5 points in the notches": (STAR, [vertex(STAR, k) for k in (1, 3, 5, 7, 9)], 2.0),
-    # ---- held at first order
+    "star, 5 points in the notches": (STAR, [vertex(STAR, k) for k in (1, 3, 5, 7, 9)], 2.0),
     "block, 4-point pinwheel": (B, pinwheel_points(12, 20, 3.0, 5.0), 4.0),
     "block, pinwheel of small discs": (B, pinwheel(12, 20, 1.0, 4.0, 7.0), 4.0),
     "block, pinwheel of large discs": (B, pinwheel(12, 20, 6.0, 2.0, 3.0), 4.0),
@@ -436,7 +438,7 @@ def test_independent_rigid_test_on_hand_cases():
     assert _independent("block, 3 mid-side points") == (False, 1)
     assert _independent("issue: 12 x 20 block, 4-disc pinwheel") == (True, 1)
     assert _independent("block, 4-disc pinwheel turned the wrong way") == (False, 1)
-    assert _independent("issue: star, 5 points in the notches") == (True, 1)
+    assert _independent("star, 5 points in the notches") == (True, 1)
 
 
 def test_independent_rotation_centre():
