@@ -43,9 +43,13 @@ another equilibrium — SPEC §4's definition on the contact graph, carried to p
    placements the search settled (× 2 the 90th percentile); the larger counts, and the
    search is repeated while it rises. At rest (``E* = 0``) only the twin can measure it.
 
-``deform_closure`` is ``U_A > error`` at a strict minimum. A start that is *not* a strict
-minimum but from which every exit needs work (``U_A > error``) is ``caged``: the part
-rattles among the fingers but cannot leave without deforming.
+``deform_closure`` is ``U_A > error`` at a strict minimum. At rest (``E* = 0``) with the
+rigid part in form closure it is ``U_A > 0`` (Thm 1, SPEC §7): every exit then deforms the
+part, the zero start energy is exact (no finger presses) and the noise floor, relative to
+energies, bounds the value of ``U_A``, not whether it exists; the barrier is kept however
+high the noise. A start that is *not* a strict minimum but from which every exit needs work
+(``U_A > error``) is ``caged``: the part rattles among the fingers but cannot leave without
+deforming.
 
 References
 ----------
@@ -407,7 +411,8 @@ class FingerRelease:
         Error estimate of ``U_A`` (J): the largest change under a halving of the lattice
         near the saddle plus the noise floor at the saddle.
     deform_closure : bool
-        Strict minimum and ``U_A > U_A_error``.
+        Strict minimum and ``U_A > U_A_error``; at rest with the rigid part in form
+        closure (``by_theorem1``), ``U_A > 0``.
     strict : bool
         The equilibrium is a strict local minimum (beyond the noise floor; at rest: the
         rigid form-closure test, Thm 1).
@@ -454,6 +459,10 @@ class FingerRelease:
         part frame.
     warnings : tuple of str
         E.g. point fingers pressing the part (their energies follow the mesh).
+    by_theorem1 : bool
+        At rest (``E* = 0``) with the rigid part in form closure: ``U_A > 0`` is certain
+        (Thm 1), so ``deform_closure`` is ``U_A > 0`` and the noise floor does not zero
+        ``U_A`` (SPEC §7).
 
     Examples
     --------
@@ -491,6 +500,7 @@ class FingerRelease:
     contact_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     contact_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     warnings: tuple = ()
+    by_theorem1: bool = False
 
     @property
     def U_A_infinite(self) -> bool:
@@ -543,6 +553,7 @@ class FingerRelease:
                 "complete": bool(self.complete),
                 "energy_model": "linear",
                 "warnings": list(self.warnings),
+                "closure_rule": "thm1_at_rest" if self.by_theorem1 else "U_A_beyond_error",
                 "seconds": float(self.seconds),
             },
         }
@@ -787,8 +798,12 @@ def _release(mesh: Any, fingers: tuple[Finger, ...], *, part: Any, solver: Any, 
     say(f"coarse search: {land.n_evaluated} placements, barrier {res.barrier - Es:.6g} J, "
         f"target {res.target}")
     path, levels_U = _refine(land, res, levels, Es, tau)
-    Ep, U_A, U_err = _barrier(land, res, path, levels_U, Es, tau)
-    held = U_A > U_err
+    # at rest a touching form-closed set cannot leave without deforming the part (Thm 1):
+    # its barrier exists whatever the (relative) noise floor; otherwise U_A must exceed
+    # its error (SPEC §7)
+    thm1 = bool(Es == 0.0 and strict)
+    Ep, U_A, U_err = _barrier(land, res, path, levels_U, Es, tau, exists=thm1)
+    held = U_A > 0.0 if thm1 else U_A > U_err
     deform = bool(strict and held)
     saddle = int(np.argmax(Ep)) if len(Ep) else None
     ell, e_star, e_sad, e_L, U_L = _elastic_limit(mesh, pe, land, start_state, path, saddle, Es)
@@ -801,7 +816,8 @@ def _release(mesh: Any, fingers: tuple[Finger, ...], *, part: Any, solver: Any, 
         quality=float(min(U_A, U_L) if deform else 0.0), strain=e_star, saddle_strain=e_sad,
         critical_distance=float(ell), e_L=e_L, n_evaluations=land.n_evaluated, complete=bool(res.complete),
         seconds=time.perf_counter() - t0, centroid=pe.centroid.copy(), contact_forces=start_state.forces,
-        contact_points=start_state.points, warnings=_point_finger_notes(start_state, fingers, Es))
+        contact_points=start_state.points, warnings=_point_finger_notes(start_state, fingers, Es),
+        by_theorem1=thm1)
 
 
 def _start_placement(pe: PlacementEnergy, start: Any) -> np.ndarray:
@@ -907,8 +923,10 @@ def _refine(land: PlacementLandscape, res: _Search, levels: int, Es: float, tau:
 
 
 def _barrier(land: PlacementLandscape, res: _Search, path: list, levels_U: list, Es: float,
-             tau: float) -> tuple[np.ndarray, float, float]:
-    """Energy along the path, ``U_A`` and its error estimate (module docstring, 3-5)."""
+             tau: float, exists: bool = False) -> tuple[np.ndarray, float, float]:
+    """Energy along the path, ``U_A`` and its error estimate (module docstring, 3-5);
+    ``exists``: the barrier is known to exist (at rest, Thm 1), so the noise floor does not
+    make it none."""
     Ep = np.array([land.energy(k) for k in path]) if path else np.zeros(0)
     barrier = float(Ep.max()) if len(Ep) else (math.inf if res.complete else res.barrier)
     if res.complete and res.target is None:
@@ -916,7 +934,7 @@ def _barrier(land: PlacementLandscape, res: _Search, path: list, levels_U: list,
     if not res.complete:
         barrier = max(res.barrier, barrier if math.isfinite(barrier) else -math.inf)
     U_A = barrier - Es
-    if math.isfinite(U_A) and U_A <= tau * barrier:
+    if math.isfinite(U_A) and U_A <= tau * barrier and not exists:
         U_A = 0.0                                     # a barrier within the noise is none
     fin = [u for u in levels_U if math.isfinite(u)]
     grid_err = max((abs(a - b) for a, b in zip(fin[:-1], fin[1:])), default=0.0)

@@ -87,6 +87,11 @@ def _lines(mesh, fingers, res, rel) -> tuple[list[str], list[str]]:
              f"quality min(U_A, U_L) = {_joules(rel.quality)}, U_L = {_joules(rel.U_L)} "
              f"(elastic limit over the critical distance {rel.critical_distance:.3g} m)"]
     warnings = list(rel.warnings)
+    if rel.by_theorem1 and rel.U_A <= rel.U_A_error:
+        warnings.append(f"U_A = {_joules(rel.U_A)} is within its error estimate "
+                        f"{rel.U_A_error:.3g} J: the part is held (rigid form closure at rest, "
+                        "Thm 1), but this mesh does not resolve how much work its release "
+                        "takes; refine the mesh for the value")
     rigid = "closed" if res.deform_closure else "not closed (escaping twist below)"
     lines.append(f"rigid test at rest (Thm 1): {rigid}, decided at order {res.order}")
     lines.append(f"energy at equilibrium: {res.energy:.6g} J (linear), {eq.iterations} "
@@ -134,7 +139,7 @@ def _joules(v: float) -> str:
 
 def _target(rel) -> str:
     if rel.U_A_infinite:
-        return "impossible within the fingers' reach (a cage)"
+        return "impossible within the fingers' reach" + (" (a cage)" if rel.caged else "")
     if not rel.complete:
         return "search stopped (U_A is a lower bound)"
     return {"released": "to a released placement", "equilibrium": "to another equilibrium"}.get(
@@ -142,8 +147,13 @@ def _target(rel) -> str:
 
 
 def _verdict(rel) -> str:
+    if rel.deform_closure and rel.by_theorem1:
+        return ("HELD (deform closure at rest: the rigid part is in form closure, so every exit "
+                "deforms it and U_A > 0, Thm 1)")
     if rel.deform_closure:
         return "HELD (deform closure: U_A exceeds its error)"
     if rel.caged:
         return "CAGED (not held in place, but leaving takes U_A)"
+    if rel.U_A > 0:
+        return "NOT HELD (U_A is within its error: no barrier is resolved)"
     return "NOT HELD (the part escapes without work)"
