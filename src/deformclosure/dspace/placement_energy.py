@@ -138,18 +138,23 @@ def _place_fingers(g, c, ftype, fpar, verts, vnorm):  # pragma: no cover - compi
 
 
 @njit(cache=True, nogil=True)
-def _body_sd(t, par, vs, ve, pv, pn, po, px, py):  # pragma: no cover - compiled
-    """Signed distance and outward unit normal of a finger body at point (px, py)."""
+def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of a finger body at boundary point (px, py),
+    where the part's inward normal is (nx, ny) (unnormalised)."""
     if t == _DISC:
         dx, dy = px - par[0], py - par[1]
         r = par[2]
-        # not behind the disc and within the pad's contact reach: the gap along the disc's
+        # within the pad's contact reach and not behind the disc: the gap along the disc's
         # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
-        # gradient (the disc's normal at that surface point); behind it the radial distance
+        # gradient (the disc's normal at that surface point). Behind the disc (s < −r) only
+        # a boundary facing the disc's back (inward normal away from the axis: the far
+        # wall of a hole the disc sits in) is measured radially; material whose boundary
+        # faces the approaching disc is the pad's (SPEC §6 gap along the axis, exact in the
+        # pad's motion), also when a pad is pressed more than its diameter into it.
         ax, ay = par[3], par[4]
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
-        if s >= -r:
+        if s >= -r or nx * ax + ny * ay > 0:
             if abs(x) >= par[5]:
                 # the pad's steep flanks (beyond 75° from the axis) and its sides: not
                 # enforced, as for pads (SPEC §6)
@@ -251,6 +256,14 @@ def _put_edge(rows, n, kind, f, corner, part, e, s, gap):  # pragma: no cover - 
 
 
 @njit(cache=True, nogil=True)
+def _node_inward(part, i):  # pragma: no cover - compiled
+    """Inward normal (unnormalised) of the boundary at node ``i``: the sum of its two
+    edges' inward unit normals."""
+    en, eprev, enext = part[3], part[5], part[6]
+    return en[eprev[i], 0] + en[enext[i], 0], en[eprev[i], 1] + en[enext[i], 1]
+
+
+@njit(cache=True, nogil=True)
 def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth):  # pragma: no cover
     """Boundary nodes against the body of finger ``f``: rows with a gap below ``radius``
     (when ``emit``), and the deepest node. Returns ``(n, any node inside, pmax, depth)``."""
@@ -258,7 +271,8 @@ def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth)
     xb = part[0]
     anyin = False
     for i in range(xb.shape[0]):
-        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1])
+        nx, ny = _node_inward(part, i)
+        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1], nx, ny)
         if sd < 0:
             anyin = True
         if -sd > pmax:
@@ -287,8 +301,10 @@ def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n
                 continue
         elif not (gl >= 0 and off - gl > pmax):
             continue
-        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay)[0]
-        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
+        na, ma = _node_inward(part, part[1][e])
+        nb, mb = _node_inward(part, part[2][e])
+        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay, na, ma)[0]
+        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey, nb, mb)[0]
         if sa > 0 and sb > 0:
             if emit:
                 n = _put_edge(rows, n, _DISC_EDGE, f, -1, part, e, s, gl - off)
@@ -395,7 +411,9 @@ def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, dep
             if not anyin:       # once a node is inside, the node rows of SPEC §6 see the disc
                 n, pmax = _disc_edges(f, t, par[f], vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax)
             continue
-        if not emit:
+        if not emit or (t == _DISC and anyin):
+            # once a node is inside a disc, the node rows of SPEC §6 alone see it (as
+            # for a round pad pressed past its centre): its centre adds no row
             continue
         got = False
         if inside:
