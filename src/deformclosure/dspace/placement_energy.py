@@ -277,7 +277,7 @@ def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth)
             anyin = True
         if -sd > pmax:
             pmax = -sd
-        if -sd > depth:
+        if -sd > depth and t != _DISC:    # a disc is a round pad: no depth limit (SPEC §6)
             depth = -sd
         if emit and sd < radius:
             n = _put(rows, n, _NODE_BODY, f, -1, i, i, i, 1.0, 0.0, ox, oy, sd, xb[i, 0], xb[i, 1])
@@ -403,7 +403,7 @@ def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, dep
             off = par[f, 2] if t == _DISC else 0.0
         inside, dmin = _inside_and_distance(wx, wy, xb, ea, eb)
         if inside:
-            if dmin + off > depth:
+            if dmin + off > depth and t != _DISC:
                 depth = dmin + off
             if dmin + off > pmax:
                 pmax = dmin + off
