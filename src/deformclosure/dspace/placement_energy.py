@@ -32,7 +32,12 @@ fingers moved by ``g⁻¹``:
   so discs at the pads' places give the pads' energies, also when pressed past their
   centre; beyond the reach (the steep flanks and the sides, ``|x| ≥ ρ sin 75°``) contact
   is not enforced, exactly as for pads (a node can slip past a disc's side only through a
-  sliver 3.4 % of ρ wide); behind the disc (``s < −ρ``) the radial distance;
+  sliver 3.4 % of ρ wide). Behind the disc (``s < −ρ``) the radial distance — except for
+  material the disc is pressed into by more than its diameter (the node's boundary faces
+  the disc, inward normal along the axis, and the disc's back at the node's cross
+  coordinate, at most the reach, lies inside the part at rest), where the pad's rule
+  holds: the gap along the axis within the reach — a pad pressed that deep still pushes
+  it (SPEC §6) — and no contact beyond it;
 * finger corner (point finger, polygon corner) against a boundary edge whose foot point
   lies on the edge: the corner's distance to the edge line, force along the edge's inward
   normal, shared by the edge's end nodes (``1 − s``, ``s``); a corner outside the part in
@@ -43,17 +48,23 @@ fingers moved by ``g⁻¹``:
   ``r`` (between two nodes a straight edge may cut the disc while both stay outside it,
   on a mesh coarse for the disc; once a node is inside, the node rows of SPEC §6 alone
   see the disc);
-* a disc whose centre lies inside the part presses on one edge like a corner with an
-  offset ``r`` (otherwise a small disc could pass through the material with no node
-  inside it).
+* a disc whose centre lies inside the part with no boundary node inside the disc presses
+  on one edge like a corner with an offset ``r`` (otherwise a small disc could pass
+  through the material with no node inside it); once a node is inside, the node rows
+  alone see the disc, as for a round pad pressed past its centre.
+
+A disc is thus exactly a round pad of SPEC §6 on its axis: two discs at the pads' places
+give, minimised over the part's float along the axis, the pads' energy of that axis.
 
 Gaps within the touching tolerance (``1e-9`` × the diameter, SPEC §3) count as free.
 Candidate rows are those with a rest gap below twice the deepest penetration; every row
 with a gap up to four times it is checked against the solution's displacement and added
 if the solution makes it penetrate (then solved again).
 
-Placements where a finger reaches deeper into the part than ``max_depth_ratio`` (50 %)
-of the part's largest inscribed radius are *inadmissible* (energy ``inf``): the rule
+Placements where a finger other than a disc reaches deeper into the part than
+``max_depth_ratio`` (50 %) of the part's largest inscribed radius are *inadmissible*
+(energy ``inf``; a disc, like a pad, has no depth limit — the gap along its axis already
+resists any depth): the rule
 :func:`deformclosure.dspace.placement.check_finger_placement` applies at rest, outside the
 small-displacement model. So are placements whose energy exceeds that of a unit strain
 throughout the part (``½ E t A``): contradictory contact rows (a finger cutting through
@@ -138,7 +149,7 @@ def _place_fingers(g, c, ftype, fpar, verts, vnorm):  # pragma: no cover - compi
 
 
 @njit(cache=True, nogil=True)
-def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny):  # pragma: no cover - compiled
+def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no cover - compiled
     """Signed distance and outward unit normal of a finger body at boundary point (px, py),
     where the part's inward normal is (nx, ny) (unnormalised)."""
     if t == _DISC:
@@ -146,15 +157,17 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny):  # pragma: no cover - 
         r = par[2]
         # within the pad's contact reach and not behind the disc: the gap along the disc's
         # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
-        # gradient (the disc's normal at that surface point). Behind the disc (s < −r) only
-        # a boundary facing the disc's back (inward normal away from the axis: the far
-        # wall of a hole the disc sits in) is measured radially; material whose boundary
-        # faces the approaching disc is the pad's (SPEC §6 gap along the axis, exact in the
-        # pad's motion), also when a pad is pressed more than its diameter into it.
+        # gradient (the disc's normal at that surface point). Behind the disc (s < −r) the
+        # radial distance, except in material the disc is pressed into by more than its
+        # diameter — the node's boundary faces the disc and the disc's back at the node's
+        # cross coordinate (at most the reach) lies inside the part — where the pad's rule
+        # holds (SPEC §6: the gap along the axis, exact in the pad's motion, within the
+        # reach; not enforced beyond it).
         ax, ay = par[3], par[4]
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
-        if s >= -r or nx * ax + ny * ay > 0:
+        if s >= -r or (nx * ax + ny * ay > 0
+                       and _buried(par[0], par[1], ax, ay, min(max(x, -par[5]), par[5]), r, part)):
             if abs(x) >= par[5]:
                 # the pad's steep flanks (beyond 75° from the axis) and its sides: not
                 # enforced, as for pads (SPEC §6)
@@ -190,6 +203,14 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny):  # pragma: no cover - 
     if best > 0:
         return best, (px - bx) / best, (py - by) / best
     return 0.0, pn[jd, 0], pn[jd, 1]
+
+
+@njit(cache=True, nogil=True)
+def _buried(cx, cy, ax, ay, x, r, part):  # pragma: no cover - compiled
+    """Whether the back of the disc (centre ``(cx, cy)``, radius ``r``, axis ``(ax, ay)``)
+    at cross coordinate ``x`` (``|x| < r``) lies inside the part at rest."""
+    sb = -np.sqrt(r * r - x * x)
+    return _inside_and_distance(cx + sb * ax - x * ay, cy + sb * ay + x * ax, part[0], part[1], part[2])[0]
 
 
 @njit(cache=True, nogil=True)
@@ -272,7 +293,7 @@ def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth)
     anyin = False
     for i in range(xb.shape[0]):
         nx, ny = _node_inward(part, i)
-        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1], nx, ny)
+        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1], nx, ny, part)
         if sd < 0:
             anyin = True
         if -sd > pmax:
@@ -303,8 +324,8 @@ def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n
             continue
         na, ma = _node_inward(part, part[1][e])
         nb, mb = _node_inward(part, part[2][e])
-        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay, na, ma)[0]
-        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey, nb, mb)[0]
+        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay, na, ma, part)[0]
+        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey, nb, mb, part)[0]
         if sa > 0 and sb > 0:
             if emit:
                 n = _put_edge(rows, n, _DISC_EDGE, f, -1, part, e, s, gl - off)
@@ -773,8 +794,8 @@ class PlacementEnergy:
     tol : float, optional
         Touching tolerance (m), default ``1e-9`` × the diameter.
     max_depth_ratio : float
-        Placements where a finger reaches deeper than this fraction of the part's largest
-        inscribed radius are inadmissible.
+        Placements where a finger other than a disc reaches deeper than this fraction of
+        the part's largest inscribed radius are inadmissible.
     disc_axes_ : array_like (n_fingers, 2), optional
         Pressing axes of the disc fingers (world frame); default :func:`disc_axes`. A
         second mesh realisation must use the first one's.
