@@ -33,8 +33,9 @@ fingers moved by ``g⁻¹``:
   centre; beyond the reach (the steep flanks and the sides, ``|x| ≥ ρ sin 75°``) contact
   is not enforced, exactly as for pads (a node can slip past a disc's side only through a
   sliver 3.4 % of ρ wide). Behind the disc (``s < −ρ``) the radial distance — except for
-  material the disc is pressed into by more than its diameter (the node's boundary faces
-  the disc, inward normal along the axis, and the disc's back at the node's cross
+  material the disc is pressed into by more than its diameter (the node's boundary does
+  not face the disc's back — inward normal within 45° of minus the axis, the far wall of a
+  hole the disc sits in — and the disc's back at the node's cross
   coordinate, at most the reach, lies inside the part at rest), where the pad's rule
   holds: the gap along the axis within the reach — a pad pressed that deep still pushes
   it (SPEC §6) — and no contact beyond it;
@@ -100,6 +101,8 @@ __all__ = ["PlacementEnergy", "PlacementState", "inscribed_radius", "disc_axes"]
 _POINT, _DISC, _POLYGON, _HALFPLANE = KERNEL_POINT, KERNEL_DISC, KERNEL_POLYGON, KERNEL_HALFPLANE
 # row kinds
 _NODE_BODY, _CORNER_EDGE, _CORNER_NODE, _CENTRE_EDGE, _DISC_EDGE = 0, 1, 2, 3, 4
+# a boundary faces a disc's back when its inward normal is within 45° of minus the axis
+_HALF_SQRT2 = 0.7071067811865476
 
 
 def inscribed_radius(mesh: Any) -> float:
@@ -159,14 +162,15 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no co
         # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
         # gradient (the disc's normal at that surface point). Behind the disc (s < −r) the
         # radial distance, except in material the disc is pressed into by more than its
-        # diameter — the node's boundary faces the disc and the disc's back at the node's
+        # diameter — the node's boundary does not face the disc's back (inward normal
+        # within 45° of minus the axis: the far wall of a hole) and the disc's back at the node's
         # cross coordinate (at most the reach) lies inside the part — where the pad's rule
         # holds (SPEC §6: the gap along the axis, exact in the pad's motion, within the
         # reach; not enforced beyond it).
         ax, ay = par[3], par[4]
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
-        if s >= -r or (nx * ax + ny * ay > 0
+        if s >= -r or (nx * ax + ny * ay > -_HALF_SQRT2 * np.hypot(nx, ny)
                        and _buried(par[0], par[1], ax, ay, min(max(x, -par[5]), par[5]), r, part)):
             if abs(x) >= par[5]:
                 # the pad's steep flanks (beyond 75° from the axis) and its sides: not
