@@ -183,3 +183,40 @@ def test_check_and_optimize_give_the_same_release_energy(name):
         assert rel.target == "released" and rel.deform_closure
         # the estimates are tight enough to mean something: a few % of U_A
         assert rel.U_A_error + pads_err <= 0.1 * U_pads
+
+
+def test_disc_gap_is_the_pad_profile():
+    """The disc kernel's gap of a boundary node is the pad's (SPEC §6, :meth:`Pad.profile`):
+    the distance along the axis to the surface at the node's cross coordinate, per unit
+    gradient, within the reach; not enforced beyond it — in front of the disc and, for
+    material the disc is buried in (pressed more than its diameter), behind it too."""
+    from deformclosure.dspace.fingers import KERNEL_DISC
+    from deformclosure.dspace.placement_energy import _body_sd
+
+    r = 2e-3
+    pad = Pad(0.0, r)
+    ang = 0.3
+    a, n = np.array([math.cos(ang), math.sin(ang)]), np.array([-math.sin(ang), math.cos(ang)])
+    centre = np.array([1e-3, -2e-3])
+    par = np.array([*centre, r, *a, pad.reach])
+    # a 40 × 40 mm square around the disc: every point below is inside it, its boundary
+    # facing the disc (inward normal along the axis)
+    sq = centre + 0.02 * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    e = np.roll(sq, -1, axis=0) - sq
+    en = np.c_[-e[:, 1], e[:, 0]] / np.linalg.norm(e, axis=1)[:, None]       # inward (CCW)
+    part = (sq, np.arange(4), np.roll(np.arange(4), -1), en, (e * e).sum(1), np.roll(np.arange(4), 1),
+            np.arange(4), np.ones(4, bool))
+    rng = np.random.default_rng(7)
+    empty = np.zeros((0, 2))
+    for _ in range(400):
+        s, x = rng.uniform(-3 * r, 2 * r), rng.uniform(-1.2 * r, 1.2 * r)
+        p = centre + s * a + x * n
+        sd, ox, oy = _body_sd(KERNEL_DISC, par, 0, 0, empty, empty, np.zeros(0), p[0], p[1], a[0], a[1], part)
+        d, slope = pad.profile(np.array([x]))
+        if not np.isfinite(d[0]):
+            assert math.isinf(sd)
+            continue
+        gap = (s - r) + d[0]                          # pad face at s = r from the centre
+        assert sd == pytest.approx(gap / math.hypot(1.0, slope[0]), rel=1e-12, abs=1e-15)
+        # the force on the part along the pad's normal there (pad A's row gradient)
+        assert np.allclose([ox, oy], (a + slope[0] * n) / math.hypot(1.0, slope[0]), atol=1e-12)
