@@ -32,13 +32,13 @@ fingers moved by ``g⁻¹``:
   so discs at the pads' places give the pads' energies, also when pressed past their
   centre; beyond the reach (the steep flanks and the sides, ``|x| ≥ ρ sin 75°``) contact
   is not enforced, exactly as for pads (a node can slip past a disc's side only through a
-  sliver 3.4 % of ρ wide). Behind the disc (``s < −ρ``) the radial distance — except for
+  sliver 3.4 % of ρ wide). Behind the disc (``s < −ρ``) the radial distance — except in
   material the disc is pressed into by more than its diameter (the node's boundary does
-  not face the disc's back — inward normal within 45° of minus the axis, the far wall of a
-  hole the disc sits in — and the disc's back at the node's cross
-  coordinate, at most the reach, lies inside the part at rest), where the pad's rule
-  holds: the gap along the axis within the reach — a pad pressed that deep still pushes
-  it (SPEC §6) — and no contact beyond it;
+  not face the disc's back — inward normal within 45° of minus the axis, the far wall of
+  a hole the disc sits in — and the disc's back at the node's cross coordinate, at most
+  the reach, lies inside the part at rest), where the pad's rule holds: the gap along the
+  axis within the reach (a pad pressed that deep still pushes it, SPEC §6) and no contact
+  beyond it;
 * finger corner (point finger, polygon corner) against a boundary edge whose foot point
   lies on the edge: the corner's distance to the edge line, force along the edge's inward
   normal, shared by the edge's end nodes (``1 − s``, ``s``); a corner outside the part in
@@ -163,10 +163,10 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no co
         # gradient (the disc's normal at that surface point). Behind the disc (s < −r) the
         # radial distance, except in material the disc is pressed into by more than its
         # diameter — the node's boundary does not face the disc's back (inward normal
-        # within 45° of minus the axis: the far wall of a hole) and the disc's back at the node's
-        # cross coordinate (at most the reach) lies inside the part — where the pad's rule
-        # holds (SPEC §6: the gap along the axis, exact in the pad's motion, within the
-        # reach; not enforced beyond it).
+        # within 45° of minus the axis: the far wall of a hole) and the disc's back at
+        # the node's cross coordinate (at most the reach) lies inside the part — where the
+        # pad's rule holds (SPEC §6: the gap along the axis, exact in the pad's motion,
+        # within the reach; not enforced beyond it).
         ax, ay = par[3], par[4]
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
@@ -214,7 +214,8 @@ def _buried(cx, cy, ax, ay, x, r, part):  # pragma: no cover - compiled
     """Whether the back of the disc (centre ``(cx, cy)``, radius ``r``, axis ``(ax, ay)``)
     at cross coordinate ``x`` (``|x| < r``) lies inside the part at rest."""
     sb = -np.sqrt(r * r - x * x)
-    return _inside_and_distance(cx + sb * ax - x * ay, cy + sb * ay + x * ax, part[0], part[1], part[2])[0]
+    px, py = cx + sb * ax - x * ay, cy + sb * ay + x * ax
+    return _inside_and_distance(px, py, part[0], part[1], part[2])[0]
 
 
 @njit(cache=True, nogil=True)
