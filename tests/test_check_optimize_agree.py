@@ -192,12 +192,12 @@ def test_check_and_optimize_give_the_same_release_energy(name):
         assert rel.U_A_error + pads_err <= 0.1 * U_pads
 
 
-def test_disc_gap_is_the_pad_profile():
-    """The disc kernel's gap of a boundary node is the pad's (SPEC §6, :meth:`Pad.profile`):
-    the distance along the axis to the surface at the node's cross coordinate, per unit
-    gradient, within the reach; not enforced beyond it — in front of the disc and, for
-    material the disc is buried in (pressed more than its diameter), behind it too."""
-    from deformclosure.dspace.fingers import KERNEL_DISC
+def test_disc_gap_behind_in_buried_material_is_the_pad_profile():
+    """Behind the disc (``s < −r``; in front: tests/test_finger_methods.py), in material the
+    disc is buried in (pressed more than its diameter), the kernel's gap of a boundary node
+    is still the pad's (SPEC §6, :meth:`Pad.profile`): the distance along the axis to the
+    surface at the node's cross coordinate, per unit gradient, within the reach; not
+    enforced beyond it. Before issue 19's fix it was the radial distance: free."""
     from deformclosure.dspace.placement_energy import _body_sd
 
     r = 2e-3
@@ -205,7 +205,8 @@ def test_disc_gap_is_the_pad_profile():
     ang = 0.3
     a, n = np.array([math.cos(ang), math.sin(ang)]), np.array([-math.sin(ang), math.cos(ang)])
     centre = np.array([1e-3, -2e-3])
-    par = np.array([*centre, r, *a, pad.reach])
+    kind, par, _, _ = DiscFinger(tuple(centre), r).kernel_encoding(a)
+    assert par[5] == pytest.approx(pad.reach, rel=1e-15)
     # a 40 × 40 mm square around the disc: every point below is inside it, its boundary
     # facing the disc (inward normal along the axis)
     sq = centre + 0.02 * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
@@ -216,9 +217,9 @@ def test_disc_gap_is_the_pad_profile():
     rng = np.random.default_rng(7)
     empty = np.zeros((0, 2))
     for _ in range(400):
-        s, x = rng.uniform(-3 * r, 2 * r), rng.uniform(-1.2 * r, 1.2 * r)
+        s, x = rng.uniform(-3 * r, -r), rng.uniform(-1.2 * r, 1.2 * r)
         p = centre + s * a + x * n
-        sd, ox, oy = _body_sd(KERNEL_DISC, par, 0, 0, empty, empty, np.zeros(0), p[0], p[1], a[0], a[1], part)
+        sd, ox, oy = _body_sd(kind, par, 0, 0, empty, empty, np.zeros(0), p[0], p[1], a[0], a[1], part)
         d, slope = pad.profile(np.array([x]))
         if not np.isfinite(d[0]):
             assert math.isinf(sd)
