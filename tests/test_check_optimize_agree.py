@@ -17,8 +17,10 @@ two fixed disc fingers of the pads' radius at the pads' places. So
 
 Before issue 19's fix a disc stopped pushing material it was pressed into by more than its
 diameter, its centre added rows a pad does not have, and it had a depth limit a pad does
-not have: on the notched bar ``check`` gave 25.8 µJ (an "equilibrium" against an
-inadmissible region) against the pads' 44.0 µJ.
+not have: on the notched bar ``check`` gave 24.7 µJ (an "equilibrium" against an
+inadmissible region) against the pads' 44.0 µJ, and on the built-in notched bar at σ*
+∞ (a "cage") against 13.8 mJ. The block agreed before and after (a convex part: no deep
+states on its way out); it guards the other direction.
 """
 
 from __future__ import annotations
@@ -228,3 +230,28 @@ def test_disc_gap_behind_in_buried_material_is_the_pad_profile():
         assert sd == pytest.approx(gap / math.hypot(1.0, slope[0]), rel=1e-12, abs=1e-15)
         # the force on the part along the pad's normal there (pad A's row gradient)
         assert np.allclose([ox, oy], (a + slope[0] * n) / math.hypot(1.0, slope[0]), atol=1e-12)
+
+
+def test_builtin_notched_bar_at_sigma_star():
+    """The built-in notched bar between round 2 mm pads at optimize's σ*: the way out sinks
+    a pad 3 mm into the 12 mm wide bar (beyond half the inscribed radius, the depth limit
+    a disc had): check's U_A was ∞ (a "cage"); now optimize's within the two error
+    estimates (check's, and the pads' noise floor at σ* times the barrier's height)."""
+    from deformclosure import notched_part
+
+    part = notched_part()
+    mesh = mesh_part(part)
+    axis, pad = GraspAxis(math.pi / 2, -0.015), Pad(0.0, RHO * MM)
+    res = optimize_pads(mesh, axis, pad, twin=PadContact(twin_mesh(part)), n_curve=3)
+    sigma = res.sigma_star
+    assert res.verdict == "held" and math.isfinite(res.U_A)
+    sc = res.start_curve
+    a = sc.axis.direction
+    face = np.asarray(sc.axis.origin) + sc.touch.z_a * a + sc.axis.offset * sc.axis.normal
+    za = face + 0.5 * (sc.sigma0 - sigma) * a
+    fingers = [DiscFinger(tuple(za - pad.radius * a), pad.radius),
+               DiscFinger(tuple(za + (sigma + pad.radius) * a), pad.radius)]
+    rel = release_energy_fingers(mesh, fingers, part=part, solver=res.solver)
+    pads_err = res.noise_relative * (float(sc.energy_at(sigma)) + res.U_A)
+    assert rel.deform_closure and rel.target == "released"
+    assert abs(rel.U_A - res.U_A) <= rel.U_A_error + pads_err, (rel.U_A, rel.U_A_error, res.U_A, pads_err)
