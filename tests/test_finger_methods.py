@@ -188,8 +188,9 @@ def test_compiled_disc_gap_is_the_capsule_profile(r, angle, s_frac, x_frac):
     x = x_frac * shape.half_span
     s = s_frac * 2 * r
     p = np.asarray(disc.center) + s * a + x * n
-    empty2, empty1 = np.zeros((0, 2)), np.zeros(0)
-    g, nx, ny = _body_sd(t, par, 0, 0, empty2, empty2, empty1, p[0], p[1])
+    empty2, empty1, none = np.zeros((0, 2)), np.zeros(0), np.zeros(0, np.int64)
+    no_part = (empty2, none, none, empty2, empty1, none, none, np.zeros(0, bool))   # unused for s ≥ −r
+    g, nx, ny = _body_sd(t, par, 0, 0, empty2, empty2, empty1, p[0], p[1], a[0], a[1], no_part)
     d, slope = shape.profile(np.array([x]))
     if abs(x) >= shape.reach:
         assert not np.isfinite(d[0]) and g == np.inf

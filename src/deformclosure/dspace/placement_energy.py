@@ -32,7 +32,13 @@ fingers moved by ``g⁻¹``:
   so discs at the pads' places give the pads' energies, also when pressed past their
   centre; beyond the reach (the steep flanks and the sides, ``|x| ≥ ρ sin 75°``) contact
   is not enforced, exactly as for pads (a node can slip past a disc's side only through a
-  sliver 3.4 % of ρ wide); behind the disc (``s < −ρ``) the radial distance;
+  sliver 3.4 % of ρ wide). Behind the disc (``s < −ρ``) the radial distance — except in
+  material the disc is pressed into by more than its diameter (the node's boundary does
+  not face the disc's back — inward normal within 45° of minus the axis, the far wall of
+  a hole the disc sits in — and the disc's back at the node's cross coordinate, at most
+  the reach, lies inside the part at rest), where the pad's rule holds: the gap along the
+  axis within the reach (a pad pressed that deep still pushes it, SPEC §6) and no contact
+  beyond it;
 * finger corner (point finger, polygon corner) against a boundary edge whose foot point
   lies on the edge: the corner's distance to the edge line, force along the edge's inward
   normal, shared by the edge's end nodes (``1 − s``, ``s``); a corner outside the part in
@@ -43,17 +49,23 @@ fingers moved by ``g⁻¹``:
   ``r`` (between two nodes a straight edge may cut the disc while both stay outside it,
   on a mesh coarse for the disc; once a node is inside, the node rows of SPEC §6 alone
   see the disc);
-* a disc whose centre lies inside the part presses on one edge like a corner with an
-  offset ``r`` (otherwise a small disc could pass through the material with no node
-  inside it).
+* a disc whose centre lies inside the part with no boundary node inside the disc presses
+  on one edge like a corner with an offset ``r`` (otherwise a small disc could pass
+  through the material with no node inside it); once a node is inside, the node rows
+  alone see the disc, as for a round pad pressed past its centre.
+
+A disc is thus exactly a round pad of SPEC §6 on its axis: two discs at the pads' places
+give, minimised over the part's float along the axis, the pads' energy of that axis.
 
 Gaps within the touching tolerance (``1e-9`` × the diameter, SPEC §3) count as free.
 Candidate rows are those with a rest gap below twice the deepest penetration; every row
 with a gap up to four times it is checked against the solution's displacement and added
 if the solution makes it penetrate (then solved again).
 
-Placements where a finger reaches deeper into the part than ``max_depth_ratio`` (50 %)
-of the part's largest inscribed radius are *inadmissible* (energy ``inf``): the rule
+Placements where a finger other than a disc reaches deeper into the part than
+``max_depth_ratio`` (50 %) of the part's largest inscribed radius are *inadmissible*
+(energy ``inf``; a disc, like a pad, has no depth limit — the gap along its axis already
+resists any depth): the rule
 :func:`deformclosure.dspace.placement.check_finger_placement` applies at rest, outside the
 small-displacement model. So are placements whose energy exceeds that of a unit strain
 throughout the part (``½ E t A``): contradictory contact rows (a finger cutting through
@@ -89,6 +101,8 @@ __all__ = ["PlacementEnergy", "PlacementState", "inscribed_radius", "disc_axes"]
 _POINT, _DISC, _POLYGON, _HALFPLANE = KERNEL_POINT, KERNEL_DISC, KERNEL_POLYGON, KERNEL_HALFPLANE
 # row kinds
 _NODE_BODY, _CORNER_EDGE, _CORNER_NODE, _CENTRE_EDGE, _DISC_EDGE = 0, 1, 2, 3, 4
+# a boundary faces a disc's back when its inward normal is within 45° of minus the axis
+_HALF_SQRT2 = 0.7071067811865476
 
 
 def inscribed_radius(mesh: Any) -> float:
@@ -138,18 +152,26 @@ def _place_fingers(g, c, ftype, fpar, verts, vnorm):  # pragma: no cover - compi
 
 
 @njit(cache=True, nogil=True)
-def _body_sd(t, par, vs, ve, pv, pn, po, px, py):  # pragma: no cover - compiled
-    """Signed distance and outward unit normal of a finger body at point (px, py)."""
+def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of a finger body at boundary point (px, py),
+    where the part's inward normal is (nx, ny) (unnormalised)."""
     if t == _DISC:
         dx, dy = px - par[0], py - par[1]
         r = par[2]
-        # not behind the disc and within the pad's contact reach: the gap along the disc's
+        # within the pad's contact reach and not behind the disc: the gap along the disc's
         # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
-        # gradient (the disc's normal at that surface point); behind it the radial distance
+        # gradient (the disc's normal at that surface point). Behind the disc (s < −r) the
+        # radial distance, except in material the disc is pressed into by more than its
+        # diameter — the node's boundary does not face the disc's back (inward normal
+        # within 45° of minus the axis: the far wall of a hole) and the disc's back at
+        # the node's cross coordinate (at most the reach) lies inside the part — where the
+        # pad's rule holds (SPEC §6: the gap along the axis, exact in the pad's motion,
+        # within the reach; not enforced beyond it).
         ax, ay = par[3], par[4]
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
-        if s >= -r:
+        if s >= -r or (nx * ax + ny * ay > -_HALF_SQRT2 * np.hypot(nx, ny)
+                       and _buried(par[0], par[1], ax, ay, min(max(x, -par[5]), par[5]), r, part)):
             if abs(x) >= par[5]:
                 # the pad's steep flanks (beyond 75° from the axis) and its sides: not
                 # enforced, as for pads (SPEC §6)
@@ -185,6 +207,15 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py):  # pragma: no cover - compiled
     if best > 0:
         return best, (px - bx) / best, (py - by) / best
     return 0.0, pn[jd, 0], pn[jd, 1]
+
+
+@njit(cache=True, nogil=True)
+def _buried(cx, cy, ax, ay, x, r, part):  # pragma: no cover - compiled
+    """Whether the back of the disc (centre ``(cx, cy)``, radius ``r``, axis ``(ax, ay)``)
+    at cross coordinate ``x`` (``|x| < r``) lies inside the part at rest."""
+    sb = -np.sqrt(r * r - x * x)
+    px, py = cx + sb * ax - x * ay, cy + sb * ay + x * ax
+    return _inside_and_distance(px, py, part[0], part[1], part[2])[0]
 
 
 @njit(cache=True, nogil=True)
@@ -251,6 +282,14 @@ def _put_edge(rows, n, kind, f, corner, part, e, s, gap):  # pragma: no cover - 
 
 
 @njit(cache=True, nogil=True)
+def _node_inward(part, i):  # pragma: no cover - compiled
+    """Inward normal (unnormalised) of the boundary at node ``i``: the sum of its two
+    edges' inward unit normals."""
+    en, eprev, enext = part[3], part[5], part[6]
+    return en[eprev[i], 0] + en[enext[i], 0], en[eprev[i], 1] + en[enext[i], 1]
+
+
+@njit(cache=True, nogil=True)
 def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth):  # pragma: no cover
     """Boundary nodes against the body of finger ``f``: rows with a gap below ``radius``
     (when ``emit``), and the deepest node. Returns ``(n, any node inside, pmax, depth)``."""
@@ -258,12 +297,13 @@ def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth)
     xb = part[0]
     anyin = False
     for i in range(xb.shape[0]):
-        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1])
+        nx, ny = _node_inward(part, i)
+        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1], nx, ny, part)
         if sd < 0:
             anyin = True
         if -sd > pmax:
             pmax = -sd
-        if -sd > depth:
+        if -sd > depth and t != _DISC:    # a disc is a round pad: no depth limit (SPEC §6)
             depth = -sd
         if emit and sd < radius:
             n = _put(rows, n, _NODE_BODY, f, -1, i, i, i, 1.0, 0.0, ox, oy, sd, xb[i, 0], xb[i, 1])
@@ -287,8 +327,10 @@ def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n
                 continue
         elif not (gl >= 0 and off - gl > pmax):
             continue
-        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay)[0]
-        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey)[0]
+        na, ma = _node_inward(part, part[1][e])
+        nb, mb = _node_inward(part, part[2][e])
+        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay, na, ma, part)[0]
+        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey, nb, mb, part)[0]
         if sa > 0 and sb > 0:
             if emit:
                 n = _put_edge(rows, n, _DISC_EDGE, f, -1, part, e, s, gl - off)
@@ -387,7 +429,7 @@ def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, dep
             off = par[f, 2] if t == _DISC else 0.0
         inside, dmin = _inside_and_distance(wx, wy, xb, ea, eb)
         if inside:
-            if dmin + off > depth:
+            if dmin + off > depth and t != _DISC:
                 depth = dmin + off
             if dmin + off > pmax:
                 pmax = dmin + off
@@ -395,7 +437,9 @@ def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, dep
             if not anyin:       # once a node is inside, the node rows of SPEC §6 see the disc
                 n, pmax = _disc_edges(f, t, par[f], vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax)
             continue
-        if not emit:
+        if not emit or (t == _DISC and anyin):
+            # once a node is inside a disc, the node rows of SPEC §6 alone see it (as
+            # for a round pad pressed past its centre): its centre adds no row
             continue
         got = False
         if inside:
@@ -755,8 +799,8 @@ class PlacementEnergy:
     tol : float, optional
         Touching tolerance (m), default ``1e-9`` × the diameter.
     max_depth_ratio : float
-        Placements where a finger reaches deeper than this fraction of the part's largest
-        inscribed radius are inadmissible.
+        Placements where a finger other than a disc reaches deeper than this fraction of
+        the part's largest inscribed radius are inadmissible.
     disc_axes_ : array_like (n_fingers, 2), optional
         Pressing axes of the disc fingers (world frame); default :func:`disc_axes`. A
         second mesh realisation must use the first one's.
