@@ -1,5 +1,5 @@
 """The one minimax search (``landscape.search.minimax_escape``), its compiled CSR variant
-(``landscape._kernels.bottleneck_escape``) and the noise-floor rule (``landscape.noise``).
+(``landscape.kernels.bottleneck_escape``) and the noise-floor rule (``landscape.noise``).
 
 The references are written here and share nothing with the search: the bottleneck level
 of every vertex comes from growing the sublevel sets ``{v : U_v ≤ L}`` level by level and
@@ -231,7 +231,7 @@ def csr(nbrs):
 def test_compiled_csr_kernel_agrees_with_the_search(case):
     """``bottleneck_escape`` (numba, CSR, energies known) and ``minimax_escape`` (lazy)
     find the same barrier; each path is a valid certificate."""
-    from deformclosure.landscape._kernels import bottleneck_escape
+    from deformclosure.landscape.kernels import bottleneck_escape
 
     nbrs, U, s = case
     indptr, indices = csr(nbrs)

@@ -9,7 +9,7 @@ share what is the same on every landscape:
 
 * :func:`~.search.minimax_escape` — the minimax (bottleneck) escape search over a lazy
   energy oracle; its compiled variant for CSR graphs with all energies known is in
-  :mod:`._kernels` (import it where used: it needs numba);
+  :mod:`.kernels` (import it where used: it needs numba);
 * :mod:`.noise` — the noise-floor rule: from measured discretisation noise to the floor
   ``τ``, and the "beyond the floor" decisions;
 * :mod:`.limit` — the elastic-limit rule.

@@ -10,7 +10,7 @@ graph given by a neighbours function and a *lazy* energy oracle: a vertex energy
 contact problem) is computed the first time the search needs it, and only then.
 
 The compiled variant for graphs held whole in CSR form, with all energies known
-(the paper model), is :func:`deformclosure.landscape._kernels.bottleneck_escape`; on the
+(the paper model), is :func:`deformclosure.landscape.kernels.bottleneck_escape`; on the
 same graph and energies it finds the same barrier (``tests/test_landscape_search.py``).
 
 References
