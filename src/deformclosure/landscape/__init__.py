@@ -1,5 +1,5 @@
-"""The release landscape shared by every model: one minimax search, one noise-floor rule
-and one elastic-limit rule.
+"""The release landscape shared by every model: one minimax search, one noise-floor rule,
+one elastic-limit rule and one σ*-search.
 
 A release landscape is a graph of vertices with energies — node pairs (the paper model,
 SPEC §4), grasp axes ``(θ, c)`` (pads, §6) or placements ``(x, y, φ)`` (fingers, §7). The
@@ -12,7 +12,8 @@ share what is the same on every landscape:
   :mod:`.kernels` (import it where used: it needs numba);
 * :mod:`.noise` — the noise-floor rule: from measured discretisation noise to the floor
   ``τ``, and the "beyond the floor" decisions;
-* :mod:`.limit` — the elastic-limit rule.
+* :mod:`.limit` — the elastic-limit rule;
+* :mod:`.optimum` — the σ*-search over piecewise-quadratic curves.
 
 It imports nothing of the models or above.
 """
