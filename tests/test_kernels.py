@@ -1,4 +1,4 @@
-"""The compiled kernels (``graph_kernels.py``, ``planning/_kernels.py`` and the planner's
+"""The compiled kernels (``landscape/kernels.py``, ``planning/_kernels.py`` and the planner's
 strictness test) against plain Python/numpy references written here, on random inputs.
 
 The kernels are private and the redesign may move them, so each is looked up inside its
@@ -32,8 +32,8 @@ def kernel(name: str, *homes: str):
     pytest.fail(f"kernel {name} not found in any of {homes}; update tests/test_kernels.py")
 
 
-GRASP = ("graph_kernels", "grasp._kernels", "planning._kernels", "planning.plan")
-PLAN = ("planning._kernels", "planning.plan", "graph_kernels", "grasp._kernels")
+GRASP = ("landscape.kernels", "planning._kernels", "planning.plan")
+PLAN = ("planning._kernels", "planning.plan", "landscape.kernels")
 
 
 # --------------------------------------------------------------------------- inputs

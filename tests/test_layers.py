@@ -9,8 +9,8 @@ L0    foundation: errors, choices, geometry, units, jsonfile, outputs, log,
       limits (the resource-limit constants and the size checks on plain numbers)
 L1    inputs: part, drawing, mesh
 L2    elasticity
-L3    mechanics: contact, landscape (issue 19), graph_kernels (the release searches'
-      compiled kernels, shared by the models)
+L3    mechanics: contact, landscape (issue 19; the release searches, their compiled
+      kernels landscape.kernels, the noise-floor and elastic-limit rules)
 L4    models: grasp, dspace, pads, fields, and the per-model limit estimators beside
       their models (grasp.size_limits, pads.size_limits); grasp, dspace and pads import
       none of each other
@@ -54,7 +54,7 @@ LAYERS: dict[str, int] = {
     "limits": 0,
     "part": 1, "drawing": 1, "mesh": 1,
     "elasticity": 2,
-    "contact": 3, "landscape": 3, "graph_kernels": 3,
+    "contact": 3, "landscape": 3,
     "grasp": 4, "dspace": 4, "pads": 4, "fields": 4,
     "planning": 5, "plotting": 5,
     "reports": 6, "batch": 6,

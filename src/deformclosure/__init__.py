@@ -13,7 +13,7 @@ there is no import cycle; ``docs/architecture.md``)::
     errors, choices, geometry, units, jsonfile, outputs, log, limits   foundation
     part, drawing, mesh                                                 inputs
     elasticity                                                          stiffness, solves
-    contact, landscape, graph_kernels                                   mechanics
+    contact, landscape                                                  mechanics
     grasp (paper model), dspace (fingers), pads, fields                 models
     planning, plotting                                                  planners, pictures
     reports (one function per command), batch                           commands as a library

@@ -21,7 +21,8 @@ another equilibrium — SPEC §4's definition on the contact graph, carried to p
    the centroid) rounded to divide 2π; ``φ`` is periodic. Translations span the fingers'
    reach (their bounding box grown by ``R``); energies are computed lazily, only where the
    search goes, each contact problem warm-started from its parent's active set.
-3. **Minimax.** Dijkstra on the bottleneck (the paper's §4.4 procedure) from ``g*``. A
+3. **Minimax.** Dijkstra on the bottleneck (the paper's §4.4 procedure) from ``g*``
+   (:func:`deformclosure.landscape.search.minimax_escape`, the search of every model). A
    vertex is a target when it is *released* — no finger presses (``E = 0``) and the part
    can translate to infinity without entering a finger (tested on its convex hull) — or
    *another equilibrium* — ``E > 0`` beyond a barrier, all 26 neighbours higher beyond
@@ -36,7 +37,8 @@ another equilibrium — SPEC §4's definition on the contact graph, carried to p
    on lattices with ``h/2``, ``h/4`` (boxes of ±3 fine steps about the saddle); the error
    estimate of ``U_A`` is the largest change under a halving plus the noise floor times
    the saddle energy.
-5. **Noise floor.** As for pads (:mod:`deformclosure.pads.noise`): the jitter of ``E``
+5. **Noise floor.** As for pads (:mod:`deformclosure.pads.noise`; the rule is
+   :mod:`deformclosure.landscape.noise`, shared by every model): the jitter of ``E``
    under sub-cell moves of ``g*`` (residual of quadratic fits, each side of ``g*`` on its
    own — a kink at the minimum is no noise —, × 4, relative) and, when
    the part's geometry is known, a second mesh realisation (twin) compared on up to 48
@@ -59,7 +61,6 @@ K. Gopalakrishnan and K. Goldberg, IJRR 24(11), 2005, §3.3 (deform closure, ``U
 
 from __future__ import annotations
 
-import heapq
 import itertools
 import math
 import time
@@ -69,6 +70,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..landscape.noise import (JITTER_FACTOR, ROUND_OFF, higher, jitter_floor, quadratic_residual,
+                               resolved, twin_floor)
+from ..landscape.search import Escape, minimax_escape
 from .fingers import Finger, as_fingers
 from .placement_energy import PlacementEnergy, PlacementState
 
@@ -165,16 +169,6 @@ class PlacementGrid:
         return max(abs(a[0] - b[0]), abs(a[1] - b[1]), min(dk, self.period - dk))
 
 
-@dataclass
-class _Search:
-    barrier: float
-    path: list
-    target: str | None            # "released", "equilibrium", "goal", None (none reachable)
-    complete: bool
-    plateau: int = 0              # extent (finest units) of the start's noise plateau
-    settled: list = field(default_factory=list)
-
-
 class PlacementLandscape:
     """Lazily evaluated energies on a :class:`PlacementGrid`, with the minimax search.
 
@@ -237,21 +231,17 @@ class PlacementLandscape:
         return -float(np.linalg.norm(self.pe.centroid + g[:2] - self._hub))
 
     def search(self, start: Key, step: int, noise: float, *, goal: Key | None = None,
-               box: tuple[Key, int] | None = None, stop_above: float | None = None) -> _Search:
-        """Minimax (bottleneck) path from ``start`` on the lattice of ``step``.
+               box: tuple[Key, int] | None = None, stop_above: float | None = None) -> Escape:
+        """Minimax (bottleneck) path from ``start`` on the lattice of ``step``
+        (:func:`~deformclosure.landscape.search.minimax_escape` on this lattice).
 
         With ``goal`` the path ends there; otherwise at the first target (released or
-        another equilibrium, module docstring). ``box = (centre, half_width)`` restricts
-        the search; ``stop_above`` (J) stops once the barrier above the start exceeds it.
+        another equilibrium beyond the relative noise floor ``noise``, module docstring).
+        ``box = (centre, half_width)`` restricts the search; ``stop_above`` (J) stops once
+        the barrier above the start exceeds it. The result's ``plateau`` is the extent
+        (finest units) of the start's noise plateau.
         """
         g = self.grid
-        start = g.norm(start)
-        goal = None if goal is None else g.norm(goal)
-        Es = self.energy(start)
-        best = {start: Es}
-        parent: dict[Key, Key] = {}
-        count = itertools.count()
-        heap = [(Es, 0.0, next(count), start)]
 
         def nbrs(v: Key) -> list[Key]:
             out = [g.norm(w) for w in g.neighbours(v, step)]
@@ -259,50 +249,13 @@ class PlacementLandscape:
                 out = [w for w in out if g.distance(w, box[0]) <= box[1]]
             return out
 
-        def path_to(v: Key) -> list[Key]:
-            p = [v]
-            while p[-1] != start:
-                p.append(parent[p[-1]])
-            return p[::-1]
-
-        plateau = 0
-        settled: list[Key] = []
-
-        def done(b: float, v: Key, target: str | None, complete: bool) -> _Search:
-            return _Search(b, path_to(v), target, complete, plateau, settled)
-
-        while heap:
-            b, _, _, v = heapq.heappop(heap)
-            if b > best.get(v, math.inf):
-                continue
-            settled.append(v)
-            if b - Es <= noise * b:
-                plateau = max(plateau, g.distance(v, start))
-            if stop_above is not None and b - Es > stop_above:
-                return done(b, v, None, False)
-            if self.n_evaluated > self.max_evaluations:
-                return done(b, v, None, False)
-            ws = nbrs(v)
-            Ew = [self.energy(w, warm=v) for w in ws]
-            if goal is not None:
-                if v == goal:
-                    return done(b, v, "goal", True)
-            elif v != start:
-                Ev = self.energy(v)
-                if Ev == 0.0 and self.escapable(v):
-                    return done(b, v, "released", True)
-                if (Ev > 0.0 and b - Es > noise * b and all(_higher(e, Ev, noise) for e in Ew)
-                        and self.is_equilibrium(v, step, noise)):
-                    return done(b, v, "equilibrium", True)
-            for w, e in zip(ws, Ew):
-                if not math.isfinite(e):
-                    continue                      # inadmissible: never through it
-                nb = max(b, e)
-                if nb < best.get(w, math.inf):
-                    best[w] = nb
-                    parent[w] = v
-                    heapq.heappush(heap, (nb, self._priority(w), next(count), w))
-        return _Search(math.inf, [], None, True, plateau, settled)
+        return minimax_escape(
+            g.norm(start), nbrs, lambda w, near: self.energy(w, warm=near),
+            is_release=lambda v, Ev: Ev == 0.0 and self.escapable(v),
+            goal=None if goal is None else g.norm(goal), noise=noise,
+            confirm=lambda v: self.energy(v) > 0.0 and self.is_equilibrium(v, step, noise),
+            stop_above=stop_above, max_evaluations=self.max_evaluations,
+            evaluated=lambda: self.n_evaluated, priority=self._priority, distance=g.distance)
 
     def is_equilibrium(self, v: Key, step: int, noise: float) -> bool:
         """Whether lattice vertex ``v`` (a minimum over its six axis neighbours) is an
@@ -319,7 +272,7 @@ class PlacementLandscape:
             if (di, dj, dk) == (0, 0, 0):
                 continue
             w = (v[0] + di * step, v[1] + dj * step, v[2] + dk * step)
-            if g.inside(w) and not _higher(self.energy(w, warm=v), Ev, noise):
+            if g.inside(w) and not higher(self.energy(w, warm=v), Ev, max(noise, ROUND_OFF)):
                 ok = False
                 break
         if ok:
@@ -334,8 +287,9 @@ class PlacementLandscape:
 
     # ---------------------------------------------------------------- noise
     def twin_noise(self, keys: Sequence[Key], floor: float, most: int = 48) -> float:
-        """Relative noise from the twin realisation: 2 × the 90th percentile of
-        ``|E₁ − E₂| / max(E₁, E₂)`` over up to ``most`` of ``keys`` (the placements a
+        """Relative noise from the twin realisation
+        (:func:`~deformclosure.landscape.noise.twin_floor`: 2 × the 90th percentile of
+        ``|E₁ − E₂| / max(E₁, E₂)``) over up to ``most`` of ``keys`` (the placements a
         search settled, i.e. below its barrier) with ``E ≥ floor`` (J)."""
         if self.twin is None:
             return 0.0
@@ -350,29 +304,16 @@ class PlacementLandscape:
         keys = [k for k in self._twin_E if self._E[k] >= floor]
         E1 = np.array([self._E[k] for k in keys])
         E2 = np.array([self._twin_E[k] for k in keys])
-        top = np.maximum(E1, E2)
-        ok = np.isfinite(top) & (top > 0)
-        if not ok.any():
-            return 0.0
-        return 2.0 * float(np.quantile(np.abs(E1[ok] - E2[ok]) / top[ok], 0.9))
-
-
-#: Relative energy differences below this are round-off, whatever the noise floor (a
-#: relative threshold on energies, not the SPEC §3 touching tolerance of lengths).
-ROUND_OFF = 1e-9
-
-
-def _higher(e: float, e0: float, noise: float) -> bool:
-    """``e`` exceeds ``e0`` beyond the relative noise (an inadmissible ``inf`` does)."""
-    return (not math.isfinite(e)) or e - e0 > max(noise, ROUND_OFF) * e
+        return twin_floor(E1, E2)
 
 
 def jitter_noise(pe: PlacementEnergy, g: np.ndarray, h: float, h_phi: float, E0: float,
-                 n: int = 9, factor: float = 4.0, angle: float = 0.0) -> float:
+                 n: int = 9, factor: float = JITTER_FACTOR, angle: float = 0.0) -> float:
     """Relative noise: ``factor`` × the largest residual of quadratic fits of ``E`` along
     the lattice axes (``e₁``, ``e₂`` at ``angle``, and φ) over one cell about ``g``, over
-    ``E0``. Each side of ``g`` is fitted on its own: at a minimum held by corners or by
-    contacts that open on one side the energy has a kink there, which is no noise."""
+    ``E0`` (:func:`~deformclosure.landscape.noise.jitter_floor`). Each side of ``g`` is
+    fitted on its own: at a minimum held by corners or by contacts that open on one side
+    the energy has a kink there, which is no noise."""
     if not E0 > 0:
         return 0.0
     n = 2 * (n // 2) + 1
@@ -380,8 +321,7 @@ def jitter_noise(pe: PlacementEnergy, g: np.ndarray, h: float, h_phi: float, E0:
     m = n // 2
     projs = []
     for sl in (slice(0, m + 1), slice(m, n)):
-        V = np.vander(ts[sl], 3)
-        projs.append((sl, np.eye(V.shape[0]) - V @ np.linalg.pinv(V)))
+        projs.append((sl, quadratic_residual(ts[sl])))
     worst = 0.0
     c, s = math.cos(angle), math.sin(angle)
     for step in (np.array([c * h, s * h, 0.0]), np.array([-s * h, c * h, 0.0]), np.array([0.0, 0.0, h_phi])):
@@ -391,7 +331,7 @@ def jitter_noise(pe: PlacementEnergy, g: np.ndarray, h: float, h_phi: float, E0:
             continue
         for sl, proj in projs:
             worst = max(worst, float(np.abs(proj @ E[sl]).max()))
-    return factor * worst / E0
+    return jitter_floor(worst, E0, factor)
 
 
 # ----------------------------------------------------------------------------- result
@@ -878,7 +818,7 @@ def _strict_at_rest(pe: PlacementEnergy, gstar: np.ndarray, Es: float, rigid_clo
     return bool(rigid_closed)
 
 
-def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float | None) -> tuple[_Search, float]:
+def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float | None) -> tuple[Escape, float]:
     """The coarse minimax search, repeated while the noise floor measured by the twin on
     the placements it settled rises. Returns the search and the noise floor."""
     for _ in range(4):
@@ -892,7 +832,7 @@ def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float 
     return res, tau
 
 
-def _refine(land: PlacementLandscape, res: _Search, levels: int, Es: float, tau: float) -> tuple[list, list]:
+def _refine(land: PlacementLandscape, res: Escape, levels: int, Es: float, tau: float) -> tuple[list, list]:
     """The path searched again near its saddle on lattices halved ``levels`` times (boxes
     of ±3 fine steps). Returns the path and ``U_A`` after each level."""
     grid = land.grid
@@ -922,7 +862,7 @@ def _refine(land: PlacementLandscape, res: _Search, levels: int, Es: float, tau:
     return path, levels_U
 
 
-def _barrier(land: PlacementLandscape, res: _Search, path: list, levels_U: list, Es: float,
+def _barrier(land: PlacementLandscape, res: Escape, path: list, levels_U: list, Es: float,
              tau: float, exists: bool = False) -> tuple[np.ndarray, float, float]:
     """Energy along the path, ``U_A`` and its error estimate (module docstring, 3-5);
     ``exists``: the barrier is known to exist (at rest, Thm 1), so the noise floor does not
@@ -934,7 +874,7 @@ def _barrier(land: PlacementLandscape, res: _Search, path: list, levels_U: list,
     if not res.complete:
         barrier = max(res.barrier, barrier if math.isfinite(barrier) else -math.inf)
     U_A = barrier - Es
-    if math.isfinite(U_A) and U_A <= tau * barrier and not exists:
+    if math.isfinite(U_A) and not resolved(U_A, barrier, tau) and not exists:
         U_A = 0.0                                     # a barrier within the noise is none
     fin = [u for u in levels_U if math.isfinite(u)]
     grid_err = max((abs(a - b) for a, b in zip(fin[:-1], fin[1:])), default=0.0)

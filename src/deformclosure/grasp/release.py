@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import graph_kernels
 from ..errors import GraspError
+from ..landscape import kernels
 from .contact_graph import ContactGraph
 
 __all__ = [
@@ -252,7 +252,7 @@ def release_energy(U: np.ndarray, graph: ContactGraph, start: int) -> Release:
     s = _check_vertex(graph, start)
     if not _is_strict_at(U, graph, s):
         return Release(0.0, None, None, None, False, s)
-    path = graph_kernels.bottleneck_escape(graph.indptr, graph.indices, U, np.int64(s))
+    path = kernels.bottleneck_escape(graph.indptr, graph.indices, U, np.int64(s))
     if path.size == 0:
         return Release(float(np.inf), None, None, None, True, s)
     up = U[path]
@@ -297,9 +297,9 @@ def release_energies(U: np.ndarray, graph: ContactGraph) -> np.ndarray:
     array([2., 0., 1.])
     """
     U = _check_energies(U, graph)
-    nmin = graph_kernels.neighbour_min(graph.indptr, graph.indices, U)
+    nmin = kernels.neighbour_min(graph.indptr, graph.indices, U)
     # Any order of equal energies gives the same result: the components of the sublevel
     # set {U <= L} after all vertices of level L are added do not depend on it, and every
     # merge at level L assigns L − U[p]. So the faster unstable sort is fine.
     order = np.argsort(U)
-    return graph_kernels.release_sweep(graph.indptr, graph.indices, U, order, U <= nmin, U < nmin)
+    return kernels.release_sweep(graph.indptr, graph.indices, U, order, U <= nmin, U < nmin)

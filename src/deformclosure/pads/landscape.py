@@ -16,20 +16,23 @@ exact curves ``U(σ)``.
 relative to the nodes; a continuum solution does not. Relative energy differences below
 ``noise`` are not resolved: a start axis is a strict minimum only if every neighbour is
 higher by more than ``noise`` × its energy, and a barrier smaller than ``noise`` × its
-height is none; :mod:`.noise` measures it. Energy differences the mesh
+height is none (:mod:`deformclosure.landscape.noise`, the rule of every landscape);
+:mod:`.noise` measures it. The search is the shared
+:func:`~deformclosure.landscape.search.minimax_escape`; this module holds only the
+coordinates: the grid, its neighbours and the axis energies. Energy differences the mesh
 cannot resolve are thus ties, and a tie is not a hold: like a translation along parallel
 edges (SPEC §3), a neutral direction lets a frictionless part slide.
 """
 
 from __future__ import annotations
 
-import heapq
-import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..landscape.noise import higher, resolved, twin_floor
+from ..landscape.search import minimax_escape
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 
@@ -167,7 +170,6 @@ class Landscape:
         self._curves: dict[int, GraspCurve] = {}
         self.twin: Landscape | None = None
         self._measured: list[int] = []
-        self.noise_factor = 2.0
 
     def measure_noise(self, most: int = 48) -> bool:
         """Solve axes visited so far on the twin realisation, at most ``most`` in all
@@ -186,19 +188,16 @@ class Landscape:
         return bool(todo)
 
     def noise(self, sigma: float) -> float:
-        """Relative noise at ``sigma`` (m): ``noise_factor`` × the 90th percentile, over the
-        axes measured on both realisations, of ``|U₁ − U₂| / max(U₁, U₂)``."""
+        """Relative noise at ``sigma`` (m) from the axes measured on both realisations
+        (:func:`~deformclosure.landscape.noise.twin_floor`: twice the 90th percentile of
+        ``|U₁ − U₂| / max(U₁, U₂)``)."""
         if self.twin is None:
             return 0.0
         if not self._measured:
             self.measure_noise()
         U1 = np.array([self.energy(v, sigma) for v in self._measured])
         U2 = np.array([self.twin.energy(v, sigma) for v in self._measured])
-        top = np.maximum(U1, U2)
-        ok = (top > 0) & np.isfinite(top)
-        if not ok.any():
-            return 0.0
-        return self.noise_factor * float(np.quantile(np.abs(U1[ok] - U2[ok]) / top[ok], 0.9))
+        return twin_floor(U1, U2)
 
     def seed(self, v: int, curve: GraspCurve) -> None:
         """Use an already traced ``curve`` for vertex ``v`` (e.g. the start axis)."""
@@ -239,38 +238,19 @@ class Landscape:
         g = self.grid
         E: dict[int, float] = {}
 
-        def U(v: int) -> float:
+        def U(v: int, near: int | None = None) -> float:
             if v not in E:
                 E[v] = self.energy(v, sigma)
             return E[v]
 
         Us = U(start)
-        if Us <= 0.0 or any(U(w) - Us <= noise * U(w) for w in g.neighbours(start)
-                            if math.isfinite(U(w))):
+        if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.neighbours(start)):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
-        best = {start: Us}
-        parent: dict[int, int] = {}
-        count = itertools.count()
-        heap = [(Us, next(count), start)]
-        while heap:
-            b, _, v = heapq.heappop(heap)
-            if b > best.get(v, math.inf):
-                continue
-            nbrs = g.neighbours(v)
-            if v != start and U(v) <= min(U(w) for w in nbrs):
-                if b - Us <= noise * b:      # a barrier the mesh cannot resolve is a tie
-                    return Release(0.0, False, None, [])
-                path = [v]
-                while path[-1] != start:
-                    path.append(parent[path[-1]])
-                path.reverse()
-                saddle = max(path, key=U)
-                return Release(b - Us, True, saddle, path)
-            for w in nbrs:
-                nb = max(b, U(w))
-                if nb < best.get(w, math.inf):      # never through an unreachable axis
-                    best[w] = nb
-                    parent[w] = v
-                    heapq.heappush(heap, (nb, next(count), w))
-        return Release(math.inf, True, None, [])
+        esc = minimax_escape(start, g.neighbours, U)       # SPEC §4's exact equilibrium test
+        if esc.target is None:
+            return Release(math.inf, True, None, [])
+        b = esc.barrier
+        if not resolved(b - Us, b, noise):      # a barrier the mesh cannot resolve is a tie
+            return Release(0.0, False, None, [])
+        return Release(b - Us, True, max(esc.path, key=U), esc.path)

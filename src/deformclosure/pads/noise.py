@@ -11,6 +11,10 @@ reproduce the boundary nodes and miss the largest part of the noise, the positio
 nodes under the pads), and the energy of the same physical axes compared between the two. A continuum answer cannot depend on the realisation, so
 their difference is discretisation noise. Where no part geometry is available (a mesh
 file), the jitter of the energy under sub-cell moves of the axis stands in for it.
+
+This module only *measures* (it builds the twin mesh and solves the jittered axes); the
+rule that turns the measurements into the floor is :mod:`deformclosure.landscape.noise`,
+shared with the placements of SPEC §7.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..landscape.noise import JITTER_FACTOR, jitter_floor, quadratic_residual
 from ..mesh import mesh_part
 from .contact import PadContact
 from .geometry import GraspAxis, Pad
@@ -60,7 +65,7 @@ def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
 
 
 def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
-                 d_angle: float, sigma_end: float, n: int = 9, factor: float = 4.0,
+                 d_angle: float, sigma_end: float, n: int = 9, factor: float = JITTER_FACTOR,
                  hole: int | None = None):
     """Noise floor from the jitter of the energy under sub-cell moves of ``axis``.
 
@@ -82,12 +87,11 @@ def jitter_noise(solver: PadContact, pad: Pad, axis: GraspAxis, d_offset: float,
     for t in ts:
         curves.append(solver.curve(GraspAxis.at(axis.point, axis.angle + t * d_angle, axis.origin),
                                    pad, sigma_end, hole))
-    V = np.vander(ts, 3)
-    proj = np.eye(n) - V @ np.linalg.pinv(V)      # residual of the least-squares quadratic
+    proj = quadratic_residual(ts)
 
     def noise(sigma: float) -> float:
         U = np.array([float(c.energy(sigma)) for c in curves]).reshape(2, n)
         U0 = float(curves[n // 2].energy(sigma))
-        return factor * float(np.abs(U @ proj.T).max()) / U0 if U0 > 0 else 0.0
+        return jitter_floor(float(np.abs(U @ proj.T).max()), U0, factor) if U0 > 0 else 0.0
 
     return noise

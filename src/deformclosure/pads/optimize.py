@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import GraspError
+from ..landscape.noise import combined_floor
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from ..landscape.optimum import maximise_quality
@@ -336,7 +337,7 @@ def _noise_floor(land: Landscape, start: GraspAxis, twin: PadContact | None,
                           land.sigma_end, hole=hole)
     if twin is not None and (hole is None or twin_hole is not None):
         land.twin = Landscape(twin, land.pad, grid, land.sigma_end, twin_hole)
-    return lambda sig: max(jitter(sig), land.noise(sig))
+    return lambda sig: combined_floor(jitter(sig), land.noise(sig))
 
 
 def _range_warnings(strain: float | None) -> tuple[str, ...]:

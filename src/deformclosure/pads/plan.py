@@ -22,8 +22,9 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .. import graph_kernels
 from ..errors import GraspError
+from ..landscape import kernels
+from ..landscape.noise import resolved, twin_floor
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 from .landscape import AxisGrid
@@ -206,22 +207,14 @@ def _noise_floor(twin: PadContact, grid: AxisGrid, pad: Pad, curves: list[GraspC
                  E: np.ndarray, lattice: np.ndarray, samples: int) -> np.ndarray:
     """Relative noise floor at each lattice σ: twice the 90th percentile, over ``samples``
     touching axes spread over the grid, of ``|U₁ − U₂| / max(U₁, U₂)`` between the mesh
-    and its twin."""
+    and its twin (:func:`~deformclosure.landscape.noise.twin_floor`)."""
     touching = [v for v in range(len(curves)) if curves[v].path is not None]
     pick = [touching[int(i)] for i in np.linspace(0, len(touching) - 1,
                                                    min(samples, len(touching)))]
-    rel = []
-    for v in pick:
-        c2 = twin.curve(grid.axis(v), pad, curves[v].sigma_end)
-        U1, U2 = E[v], c2.energy(lattice)
-        top_ = np.maximum(U1, U2)
-        rel.append(np.where(top_ > 0, np.abs(U1 - U2) / np.where(top_ > 0, top_, 1.0), np.nan))
-    rel = np.array(rel).reshape(len(pick), len(lattice))
-    tau = np.zeros(len(lattice))
-    for k in range(len(lattice)):
-        col = rel[:, k][np.isfinite(rel[:, k])]
-        tau[k] = 2.0 * float(np.quantile(col, 0.9)) if len(col) else 0.0
-    return tau
+    U1 = E[pick].reshape(len(pick), len(lattice))
+    U2 = np.array([twin.curve(grid.axis(v), pad, curves[v].sigma_end).energy(lattice)
+                   for v in pick]).reshape(len(pick), len(lattice))
+    return np.array([twin_floor(U1[:, k], U2[:, k]) for k in range(len(lattice))])
 
 
 def _release_energies(A: sp.csr_matrix, E: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -231,15 +224,15 @@ def _release_energies(A: sp.csr_matrix, E: np.ndarray, tau: np.ndarray) -> np.nd
     UA = np.zeros_like(E)
     for k in range(E.shape[1]):
         U = E[:, k]
-        nmin = graph_kernels.neighbour_min(A.indptr, A.indices, U)
+        nmin = kernels.neighbour_min(A.indptr, A.indices, U)
         # Strict beyond the noise floor: every neighbour higher by more than tau × its energy.
         Umin_rel = np.full(V, np.inf)
         for v in range(V):
             nb = A.indices[A.indptr[v]:A.indptr[v + 1]]
             Umin_rel[v] = np.min(U[nb] - tau[k] * U[nb] - U[v])
         strict = (Umin_rel > 0) & (U > 0)      # zero energy: released, holds nothing
-        ua = graph_kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
-        ua[(ua > 0) & np.isfinite(ua) & (ua <= tau[k] * (U + ua))] = 0.0   # ties
+        ua = kernels.release_sweep(A.indptr, A.indices, U, np.argsort(U), U <= nmin, strict)
+        ua[(ua > 0) & np.isfinite(ua) & ~resolved(ua, U + ua, tau[k])] = 0.0   # ties
         UA[:, k] = ua
     return UA
 

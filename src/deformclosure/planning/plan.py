@@ -65,7 +65,7 @@ from numba import njit
 from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
 from ..grasp import pieces as pc
-from ..graph_kernels import heap_pop, heap_push, path_to
+from ..landscape.kernels import heap_pop, heap_push, path_to
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.elastic_limit import elastic_limit_separation
 from ..grasp.release import release_energies
@@ -187,8 +187,9 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
               hk, hv, bseen, stack, epoch):  # pragma: no cover - compiled
     """Escape levels of start ``s`` at separation ``x``: ``(strict, B, B_stable, path)``.
 
-    The minimax search of :func:`deformclosure.graph_kernels.bottleneck_escape` (a
-    path's cost is its largest vertex energy), with the energies computed on the fly so
+    The minimax search of :func:`deformclosure.landscape.kernels.bottleneck_escape` (a
+    path's cost is its largest vertex energy; the same heap, :func:`heap_push`,
+    :func:`heap_pop`, and :func:`path_to`), with the energies computed on the fly so
     that its work is the explored basin, not the graph. ``B`` is the level of the first
     equilibrium ``e ≠ s`` it settles — the release level, ``U_A = B − U_s`` when ``s`` is
     a strict minimum (``strict``).
@@ -203,6 +204,15 @@ def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, don
     of the cell, since no energy rises with σ. ``inf`` and an empty path where none is
     reachable. ``seen``/``done``/``best``/``pred``/``bseen`` are workspaces stamped
     with ``epoch``.
+
+    Why not ``bottleneck_escape`` itself: this is a different search, not a second copy
+    of it. It does not stop at the first equilibrium but records its level (``B``) and
+    goes on to the first one that stays an equilibrium on the whole cell ``[x, y]``
+    (crossing lists ``cr_ptr``/``cr_x`` and the descent test :func:`_k_drains_to`); it
+    computes energies from ``(x0, k)`` at σ = ``x`` instead of reading a vector (the
+    planner would otherwise evaluate every vertex per call), and it reuses
+    epoch-stamped workspaces across the millions of calls of a plan. What is shared is
+    shared: the heap and the path reconstruction.
     """
     us = _e(x0[s], k[s], x)
     strict = _strict_at(indptr, indices, x0, k, s, x)

@@ -1,10 +1,15 @@
-"""Numba kernels of the release-energy searches on a graph (SPEC §4; paper §4.4).
+"""The compiled release-landscape kernels: CSR graphs with all vertex energies known.
 
-Shared by every model whose release landscape is a graph with vertex energies: the
-paper's contact graph (:mod:`deformclosure.grasp.release`, whose wrappers validate the
-inputs), the pads' axis grid (:mod:`deformclosure.pads.plan`) and the paper planner's
-lattice search (:mod:`deformclosure.planning.plan`, with the heap and the path). They sit
-below the models (mechanics layer, with ``landscape``), so no model imports another's.
+The landscape package's variant of :func:`deformclosure.landscape.search.minimax_escape`
+for graphs held whole — the paper's contact graph (:mod:`deformclosure.grasp.release`,
+whose wrappers validate the inputs, SPEC §4) and the pads' axis grid
+(:mod:`deformclosure.pads.plan`, §6): :func:`bottleneck_escape` is the same minimax search
+with SPEC §4's exact equilibrium test, :func:`release_sweep` the release energy of every
+vertex at once. The binary heap (:func:`heap_push`, :func:`heap_pop`) and :func:`path_to`
+serve the paper planner's branch-and-bound search as well
+(:mod:`deformclosure.planning.plan`). Imported where used (numba is loaded on import), so
+``import deformclosure.landscape`` stays light.
+
 All kernels take the symmetric CSR adjacency ``(indptr, indices)`` of a graph and the
 vertex energies ``U`` (J); they do not check their inputs. ``cache=True`` keeps the
 compiled code between runs.
@@ -91,7 +96,8 @@ def bottleneck_escape(indptr, indices, U, start):  # pragma: no cover - compiled
     """Minimax path from ``start`` to the nearest other equilibrium vertex.
 
     A Dijkstra search where a path's cost is the largest ``U`` over its vertices
-    (``max`` replaces ``+``); it stops at the first settled vertex ``v != start`` with
+    (``max`` replaces ``+``; :func:`~deformclosure.landscape.search.minimax_escape` with
+    ``noise=None``, on a graph held whole); it stops at the first settled vertex ``v != start`` with
     ``U[v] <= U[w]`` for all neighbours ``w``. Equilibria are tested lazily, only on
     settled vertices.
 
