@@ -35,7 +35,8 @@ from scipy.optimize import minimize_scalar
 from deformclosure import Part, mesh_part
 from deformclosure.dspace import DiscFinger, PlacementEnergy, release_energy_fingers
 from deformclosure.pads import GraspAxis, Pad, PadContact, optimize_pads
-from deformclosure.pads.noise import jitter_noise, twin_mesh
+from deformclosure.mesh.generate import twin_mesh
+from deformclosure.pads.noise import jitter_noise
 
 MM = 1e-3
 RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "thickness": 0.002, "elastic_limit_strain": 0.8,

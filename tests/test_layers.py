@@ -69,12 +69,7 @@ MODELS_APART = ("grasp", "dspace", "pads")
 #: ``contact/`` and ``landscape/`` refactor; not to be edited meanwhile): ``(importer,
 #: imported)`` without the ``deformclosure.`` prefix, as the failure messages print them.
 #: The refactor removes them and then this constant; nothing may be added to it.
-PENDING_CONTACT_REFACTOR: set[tuple[str, str]] = {
-    # dspace.escape: the pads solver and twin mesh of the noise floor of a finger set's
-    # release search (becomes landscape's one noise-floor rule).
-    ("dspace.escape", "pads"), ("dspace.escape", "pads.contact"),
-    ("dspace.escape", "pads.noise"),
-}
+PENDING_CONTACT_REFACTOR: set[tuple[str, str]] = set()
 
 #: What ``import deformclosure`` alone must not load (issue 10): storage, process pools,
 #: clusters, plotting, the command line and the JIT compiler are loaded when used.

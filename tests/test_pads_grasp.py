@@ -15,7 +15,7 @@ import pytest
 import deformclosure as dc
 from deformclosure.pads import GraspAxis, Pad, PadContact, optimize_pads, pad_grasp, richardson
 from deformclosure.pads.landscape import Landscape
-from deformclosure.pads.noise import twin_mesh
+from deformclosure.mesh.generate import twin_mesh
 from deformclosure.pads.plan import plan_pads
 
 MM = 1e-3

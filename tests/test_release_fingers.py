@@ -237,7 +237,7 @@ def test_check_agrees_with_optimize_for_two_pads(name):
     """SPEC §7: for two pads, check (disc fingers at the pads' places at σ) and optimize
     (pads model) agree on the verdict and on U_A within the stated errors."""
     from deformclosure.pads import GraspAxis, Pad, PadContact, optimize_pads
-    from deformclosure.pads.noise import twin_mesh
+    from deformclosure.mesh.generate import twin_mesh
 
     outer, area, (p, q), rho, held = PAD_GRASPS[name]
     part = part_mm(outer, area)

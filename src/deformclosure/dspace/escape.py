@@ -37,8 +37,8 @@ another equilibrium — SPEC §4's definition on the contact graph, carried to p
    on lattices with ``h/2``, ``h/4`` (boxes of ±3 fine steps about the saddle); the error
    estimate of ``U_A`` is the largest change under a halving plus the noise floor times
    the saddle energy.
-5. **Noise floor.** As for pads (:mod:`deformclosure.pads.noise`; the rule is
-   :mod:`deformclosure.landscape.noise`, shared by every model): the jitter of ``E``
+5. **Noise floor.** As for pads (the rule is :mod:`deformclosure.landscape.noise`, shared
+   by every model; the twin realisation :func:`deformclosure.mesh.generate.twin_mesh`): the jitter of ``E``
    under sub-cell moves of ``g*`` (residual of quadratic fits, each side of ``g*`` on its
    own — a kink at the minimum is no noise —, × 4, relative) and, when
    the part's geometry is known, a second mesh realisation (twin) compared on up to 48
@@ -619,7 +619,7 @@ def release_energy_fingers(mesh: Any, fingers: Sequence[Finger], *, part: Any = 
     fingers : sequence of Finger
         Fixed fingers (m), placed against the part at rest (touching or pre-squeezing).
     part : Part, optional
-        The part's geometry: enables the twin-mesh noise floor (:mod:`deformclosure.pads.noise`).
+        The part's geometry: enables the twin-mesh noise floor (:func:`deformclosure.mesh.generate.twin_mesh`).
     solver : PadContact, optional
         Reuse a factorisation of ``mesh``.
     start : array_like (3,) or EquilibriumResult, optional
@@ -793,10 +793,10 @@ def _start_noise(land: PlacementLandscape, gstar: np.ndarray, Es: float, noise: 
         tau = jitter_noise(pe, gstar, grid.h, grid.h_phi, Es, angle=grid.angle)
     if noise:
         if twin is None and part is not None:
-            from ..pads.contact import PadContact
-            from ..pads.noise import twin_mesh
+            from ..contact.compliance import BoundaryCompliance
+            from ..mesh.generate import twin_mesh
 
-            twin = PadContact(twin_mesh(part))
+            twin = BoundaryCompliance.placement_gauge(twin_mesh(part))
         if twin is not None:
             land.twin = PlacementEnergy(twin.mesh, pe.fingers, solver=twin, centroid=pe.centroid,
                                         disc_axes_=pe.disc_axes)

@@ -6,6 +6,8 @@ split the boundary segment they lie on, interior points are inserted as vertices
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import triangle as tr
 import shapely
@@ -17,7 +19,8 @@ from ..geometry import touch_tolerance
 from ..part import Part
 from .core import Mesh
 
-__all__ = ["mesh_part", "insert_points_in_ring", "default_max_area"]
+__all__ = ["mesh_part", "insert_points_in_ring", "default_max_area", "twin_mesh", "TWIN_ANGLE",
+           "TWIN_AREA"]
 
 
 def insert_points_in_ring(ring: np.ndarray, points: np.ndarray, tol: float
@@ -245,3 +248,39 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
         if np.any(d > tol * 10):
             raise MeshError("an inserted point did not become a mesh node; report this as a bug")
     return mesh
+
+
+# ----------------------------------------------------------------------------- twin
+
+#: Rotation (rad) of the frame in which the twin realisation is meshed.
+TWIN_ANGLE = 1.0
+
+#: Triangle-area ratio of the twin realisation: boundary nodes at other positions, and a
+#: coarser mesh, so the noise it shows errs on the large (cautious) side and costs less.
+TWIN_AREA = 1.3
+
+
+def _rot(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s], [s, c]])
+
+
+def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
+              area_ratio: float = TWIN_AREA):
+    """A second realisation of the part's mesh, returned in the part frame: the
+    discretisation-noise measurement of every model (SPEC §6 "Noise floor").
+
+    Meshed in a frame rotated by ``angle`` (rad) with ``area_ratio`` × the triangle area
+    ``max_area`` (m², default the part's), so every node, boundary nodes included, sits
+    elsewhere (Triangle splits a straight edge evenly, so a rotation alone would reproduce
+    the boundary nodes).
+    """
+    c = part.outer.mean(axis=0)
+    R = _rot(angle)
+    rot = lambda P: (np.asarray(P, float) - c) @ R.T + c  # noqa: E731
+    opts = part.mesh_options
+    pts = np.asarray(opts.points, float).reshape(-1, 2)
+    rpart = replace(part, outer=rot(part.outer), holes=tuple(rot(h) for h in part.holes),
+                    mesh_options=replace(opts, points=rot(pts) if len(pts) else opts.points))
+    area = default_max_area(part) if max_area is None else max_area
+    return mesh_part(rpart, max_area=area * area_ratio).rotated(-angle, c)

@@ -201,7 +201,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     solver : PadContact, optional
         Reuse a factorisation of this mesh.
     twin : PadContact, optional
-        The part meshed again (:func:`.noise.twin_mesh`): the noise floor from its energies
+        The part meshed again (:func:`deformclosure.mesh.generate.twin_mesh`): the noise floor from its energies
         on the axes compared; without it, from the jitter under sub-cell moves of the axis.
     hole, twin_hole : int, optional
         Expanding grasp: the pads open inside this hole of ``mesh`` (of ``twin``),

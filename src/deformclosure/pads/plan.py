@@ -111,7 +111,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     top : int
         Number of best candidates verified afterwards (0: none), ``--verify``.
     twin : PadContact, optional
-        A second mesh realisation (:func:`.noise.twin_mesh`): ``noise_samples`` axes
+        A second mesh realisation (:func:`deformclosure.mesh.generate.twin_mesh`): ``noise_samples`` axes
         spread over the grid are solved on it too, and twice the 90th percentile of the
         relative difference is the noise floor at each lattice σ (ties below it).
     noise_samples : int

@@ -27,7 +27,7 @@ from ..mesh import mesh_part
 from ..mesh.generate import default_max_area
 from .contact import PadContact, hole_containing
 from .geometry import GraspAxis, Pad
-from .noise import twin_mesh
+from ..mesh.generate import twin_mesh
 from .optimize import PadGraspResult, optimize_pads
 
 __all__ = ["RefinedPadGrasp", "richardson", "pad_grasp"]

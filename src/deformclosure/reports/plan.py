@@ -37,7 +37,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
 def _pads(part, p: dict, progress) -> Report:
     from ..pads import PadContact
-    from ..pads.noise import twin_mesh
+    from ..mesh.generate import twin_mesh
     from ..pads.plan import plan_pads
     from ..pads.size_limits import check_pads_size
 
