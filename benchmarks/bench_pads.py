@@ -29,7 +29,7 @@ import deformclosure as dc
 from deformclosure.grasp.analysis import grasp_model, optimize_separation
 from deformclosure.pads import GraspAxis, Pad, PadContact, pad_grasp
 from deformclosure.mesh.generate import twin_mesh
-from deformclosure.pads.plan import plan_pads
+from deformclosure.planning.pads import plan_pads
 
 AXIS = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
 PAD = Pad(0.0, 0.002)

@@ -25,7 +25,7 @@ import numpy as np
 import deformclosure as dc
 from deformclosure.part import part_from_drawing
 from deformclosure.pads import GraspAxis, Pad, pad_grasp
-from deformclosure.pads.plan import plan_pads
+from deformclosure.planning.pads import plan_pads
 from deformclosure.plotting.mesh import plot_mesh
 from deformclosure.plotting.pads import plot_pad_grasp, plot_pad_plan, plot_pad_quality
 

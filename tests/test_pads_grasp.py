@@ -16,7 +16,7 @@ import deformclosure as dc
 from deformclosure.pads import GraspAxis, Pad, PadContact, optimize_pads, pad_grasp, richardson
 from deformclosure.pads.landscape import Landscape
 from deformclosure.mesh.generate import twin_mesh
-from deformclosure.pads.plan import plan_pads
+from deformclosure.planning.pads import plan_pads
 
 MM = 1e-3
 RUBBER = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0, "elastic_limit_strain": 0.8}

@@ -16,7 +16,7 @@ from hypothesis import given, strategies as st
 import deformclosure as dc
 from deformclosure import reports
 from deformclosure.pads import Pad
-from deformclosure.pads.plan import plan_pads, screened_verdict
+from deformclosure.planning.pads import plan_pads, screened_verdict
 
 MM = 1e-3
 

@@ -42,7 +42,7 @@ def public_plot_functions() -> list[str]:
 def cases():
     from deformclosure.dspace import deform_closure, dfree_slice, load_fingers
     from deformclosure.pads import GraspAxis, Pad, pad_grasp
-    from deformclosure.pads.plan import plan_pads
+    from deformclosure.planning.pads import plan_pads
 
     part = dc.Part.from_file(ROOT / "examples" / "rectangle.json")
     mesh = dc.mesh_part(part)

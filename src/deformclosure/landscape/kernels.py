@@ -3,7 +3,7 @@
 The landscape package's variant of :func:`deformclosure.landscape.search.minimax_escape`
 for graphs held whole — the paper's contact graph (:mod:`deformclosure.grasp.release`,
 whose wrappers validate the inputs, SPEC §4) and the pads' axis grid
-(:mod:`deformclosure.pads.plan`, §6): :func:`bottleneck_escape` is the same minimax search
+(:mod:`deformclosure.planning.pads`, §6): :func:`bottleneck_escape` is the same minimax search
 with SPEC §4's exact equilibrium test, :func:`release_sweep` the release energy of every
 vertex at once. The binary heap (:func:`heap_push`, :func:`heap_pop`) and :func:`path_to`
 serve the paper planner's branch-and-bound search as well

@@ -26,7 +26,7 @@ from .noise import jitter_noise
 from .limit import (LINEAR_STRAIN_RANGE, PadLimit, elastic_limit_strain_of,
                     pad_elastic_limit, pad_strain_at)
 
-__all__ = ["PadGraspResult", "optimize_pads", "UNITS"]
+__all__ = ["PadGraspResult", "optimize_pads", "UNITS", "check_counts"]
 
 UNITS = {"length": "m", "energy": "J", "stiffness": "N/m", "strain_per_length": "1/m",
          "angle": "rad", "force": "N"}
@@ -236,7 +236,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     (7.657, 'held')
     """
     e_L = elastic_limit_strain_of(mesh)
-    _check_counts(n_angles=n_angles, n_offsets=n_offsets, n_samples=(n_samples, 2),
+    check_counts(n_angles=n_angles, n_offsets=n_offsets, n_samples=(n_samples, 2),
                   n_curve=(n_curve, 2))
     solver = PadContact(mesh) if solver is None else solver
     start_curve = _start_curve(solver, GraspAxis(axis.angle, axis.offset, axis.origin), pad, hole)
@@ -298,7 +298,7 @@ def _optimum(land: Landscape, s: int, Us, U_sL: float, sigma_L: float, sigma0: f
     return sigma_star, ev(sigma0 if sigma_star is None else sigma_star)
 
 
-def _check_counts(**counts) -> None:
+def check_counts(**counts) -> None:
     """Each ``name=value`` or ``name=(value, least)`` a whole number ≥ least (default 1)."""
     for name, spec in counts.items():
         value, least = spec if isinstance(spec, tuple) else (spec, 1)

@@ -38,7 +38,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 def _pads(part, p: dict, progress) -> Report:
     from ..pads import PadContact
     from ..mesh.generate import twin_mesh
-    from ..pads.plan import plan_pads
+    from ..planning.pads import plan_pads
     from ..pads.size_limits import check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])

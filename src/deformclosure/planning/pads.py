@@ -25,11 +25,11 @@ import scipy.sparse as sp
 from ..errors import GraspError
 from ..landscape import kernels
 from ..landscape.noise import resolved, twin_floor
-from .contact import GraspCurve, PadContact
-from .geometry import GraspAxis, Pad
-from .landscape import AxisGrid
-from .limit import elastic_limit_strain_of, pad_elastic_limit
-from .optimize import UNITS, _check_counts, optimize_pads
+from ..pads.contact import GraspCurve, PadContact
+from ..pads.geometry import GraspAxis, Pad
+from ..pads.landscape import AxisGrid
+from ..pads.limit import elastic_limit_strain_of, pad_elastic_limit
+from ..pads.optimize import UNITS, check_counts, optimize_pads
 
 __all__ = ["PadPlan", "plan_pads"]
 
@@ -156,7 +156,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     ([15.0, 6.0], 'held', True)
     """
     e_L = elastic_limit_strain_of(mesh)
-    _check_counts(n_angles=n_angles, n_offsets=n_offsets, n_sigma=n_sigma, top=(top, 0),
+    check_counts(n_angles=n_angles, n_offsets=n_offsets, n_sigma=n_sigma, top=(top, 0),
                   noise_samples=(noise_samples, 0))
     solver = PadContact(mesh) if solver is None else solver
     grid = AxisGrid.over_part(solver, GraspAxis(0.0, 0.0, tuple(solver.centroid)), pad,
@@ -303,7 +303,7 @@ def _refined(part, ax: GraspAxis, pad: Pad, levels: int, area: float, mesh, n_an
     (``h`` doubling below it), or starting at it (``h`` halving) when the plan's mesh or a
     coarser one is blind: boundary nodes farther apart than the pads' contact reach, so
     that energies follow the nodes, not the part."""
-    from .refine import pad_grasp
+    from ..pads.refine import pad_grasp
 
     from ..mesh import mesh_part
 
