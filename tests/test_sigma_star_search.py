@@ -2,8 +2,9 @@
 
 Independent value: ``Q(σ) = min(U_A, U_L)`` sampled densely on ``[σ_L, σ0]`` for random
 piecewise-quadratic start and saddle curves (two saddles, the lower one winning, so the
-saddle changes inside the range); the search's optimum must be at least every sample and
-attained: ``Q`` evaluated by its definition at the returned σ* equals the returned Q*.
+saddle changes inside the range, and the start stops being a strict minimum where it
+crosses a saddle's curve — given to the search, as its contract asks); the search's
+optimum must be at least every sample and attained: ``Q`` evaluated by its definition at the returned σ* equals the returned Q*.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from types import SimpleNamespace
 
 import numpy as np
 from hypothesis import given, settings, strategies as st
+from scipy.optimize import brentq
 
 from deformclosure.landscape.optimum import maximise_quality
 
@@ -61,7 +63,16 @@ def test_search_matches_dense_sampling(seed):
         return SimpleNamespace(Q=min(UA, U_sL - Us(x)), key=key)
 
     curves = {1: (U1, k1), 2: (U2, k2)}
-    best, ev = maximise_quality(evaluate, Us, ks, lambda w: curves[w], U_sL, lo, hi, 8)
+    # the search's contract: the caller gives every σ where the class of the release can
+    # change — here the crossings of the start with its neighbours — among the kinks
+    cross = []
+    for U in (U1, U2):
+        xs = np.linspace(lo, hi, 2001)
+        d = np.array([U(x) - Us(x) for x in xs])
+        for i in np.flatnonzero(np.sign(d[:-1]) * np.sign(d[1:]) < 0):
+            cross.append(brentq(lambda x: U(x) - Us(x), xs[i], xs[i + 1], xtol=1e-15))
+    kinks = np.sort(np.r_[ks, cross])
+    best, ev = maximise_quality(evaluate, Us, kinks, lambda w: curves[w], U_sL, lo, hi, 8)
     xs = np.linspace(lo, hi, 4001)
     Q = np.array([evaluate(x).Q for x in xs])
     if Q.max() <= 0:

@@ -66,7 +66,12 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
     start_energy : callable
         ``U_s(σ)`` (J), the start vertex's energy.
     start_kinks : array_like
-        Separations (m) where ``U_s`` changes piece.
+        Separations (m) where ``U_s`` changes piece, and any others the caller knows the
+        release class can change at (the start's crossings with its neighbours). They
+        are evaluated with the samples, and the interval on each side of one is probed at
+        its middle; elsewhere, between two evaluated separations with the same ``key``
+        the class is taken not to change, so a window of strictness narrower than the
+        sampling that does not start at one of these is not seen.
     saddle_curve : callable
         ``saddle_curve(w)`` → ``(U_w, kinks_w)``: vertex ``w``'s energy (callable, J) and
         its kinks (m).
@@ -127,6 +132,10 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
     for x in xs:
         consider(x, ev(x).Q)
     stack = list(zip(xs[:-1], xs[1:]))
+    # a kink is where the class may change: the class on either side of it can differ
+    # from its own (a tie at the crossing itself), so such an interval is probed once
+    kink_set = set(k for k in kinks.tolist() if lo < k < hi)
+    probed: set[tuple[float, float]] = set()
     guard = 0
     while stack and guard < 20000:
         guard += 1
@@ -139,6 +148,13 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
                 stack += [(a, m), (m, b)]
             continue
         strict, w, infinite = ea.key
+        if ((a in kink_set or b in kink_set) and (a, b) not in probed and b - a > tol):
+            probed.add((a, b))
+            m = 0.5 * (a + b)
+            consider(m, ev(m).Q)
+            if ev(m).key != ea.key:
+                stack += [(a, m), (m, b)]
+                continue
         if not strict or infinite:
             continue        # Q ≡ 0, or Q = U_L (increasing in σ): the ends suffice
         Uw, w_kinks = saddle_curve(w)
