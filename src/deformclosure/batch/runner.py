@@ -168,8 +168,14 @@ def run_batch(jobs: Sequence[Job] | str | os.PathLike, db_path: str | os.PathLik
         failures = (store.failures(conn, shown, unique)
                     if any(rec.status.get(k) == "failed" for k in unique) else [])
     except KeyboardInterrupt:
-        n_kept = sum(1 for k in unique if rec is not None and k in rec.status)
-        raise BatchInterrupted(shown, rec.n_finished if rec else 0, n_kept) from None
+        # counted from the file: Ctrl-C may land between a row's commit and its count here
+        try:
+            kept = store.statuses(conn, shown, unique) if conn is not None else {}
+        except BatchError:
+            kept = dict(rec.status) if rec is not None else {}
+        n_before = sum(1 for k in kept if rec is not None and k in rec.initial)
+        n_done = max(len(kept) - n_before, rec.n_finished if rec else 0)
+        raise BatchInterrupted(shown, n_done, len(kept)) from None
     finally:
         if conn is not None:
             conn.close()
@@ -221,6 +227,7 @@ class _Recorder:
 
     def __init__(self, conn, shown: str, status: dict[str, str]):
         self.conn, self.shown, self.status = conn, shown, status
+        self.initial = frozenset(status)        # rows of earlier runs
         self.version = _version()
         self.n_finished = self.n_bad = 0
         self._bar = None
