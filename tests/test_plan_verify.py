@@ -8,6 +8,7 @@ screened (lattice) row is a candidate by construction.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from deformclosure.pads import Pad
 from deformclosure.planning.pads import plan_pads, screened_verdict
 
 MM = 1e-3
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @given(st.floats(allow_nan=False, allow_infinity=True, min_value=-1.0))
@@ -72,7 +74,7 @@ def test_the_best_verified_row_of_a_notched_part_goes_through_the_notches():
 
 
 def test_plan_report_rows_carry_a_pasteable_axis():
-    rep = reports.run("plan", "examples/notched_bar.json",
+    rep = reports.run("plan", str(ROOT / "examples" / "notched_bar.json"),
                       {"pad_radius": 2.0, "grid_angles": 6, "grid_offsets": 16, "verify": 1})
     rows = rep.data["axes"]
     assert all({"axis", "verified", "verdict"} <= set(r) for r in rows)
@@ -83,3 +85,22 @@ def test_plan_report_rows_carry_a_pasteable_axis():
     assert (x * MM, y * MM) == pytest.approx(tuple(best["axis"]["point"]), abs=1e-8)
     assert math.radians(deg) == pytest.approx(best["axis"]["angle"] % (2 * math.pi), abs=1e-6)
     assert rep.data["top"] and rep.data["top"][0]["verdict"] == "held"
+
+
+def test_a_barrier_on_a_blind_mesh_is_no_hold():
+    """optimize on the README block (convex: frictionless pads cannot hold it): on the
+    part's own coarse mesh the boundary nodes are farther apart than the pads' reach and
+    a node-noise barrier appears — the verdict is 'undecided', never 'held'; on a mesh
+    that resolves the pads it is 'not held'."""
+    from deformclosure.pads.optimize import mesh_is_blind
+
+    rect = str(ROOT / "examples" / "rectangle.json")
+    coarse = reports.run("optimize", rect,
+                         {"at": ("0,10", "12,10"), "grid_angles": 12, "grid_offsets": 16})
+    part = dc.Part.from_file(rect)
+    assert mesh_is_blind(dc.mesh_part(part), Pad(0.0, coarse.data["pad"]["radius"]))
+    assert coarse.data["verdict"] in ("undecided", "not held")
+    fine = reports.run("optimize", rect,
+                       {"at": ("0,10", "12,10"), "max_area": 0.3, "grid_angles": 12,
+                        "grid_offsets": 16})
+    assert fine.data["verdict"] == "not held"

@@ -26,7 +26,8 @@ from .noise import jitter_noise
 from .limit import (LINEAR_STRAIN_RANGE, PadLimit, elastic_limit_strain_of,
                     pad_elastic_limit, pad_strain_at)
 
-__all__ = ["PadGraspResult", "optimize_pads", "UNITS", "check_counts"]
+__all__ = ["PadGraspResult", "optimize_pads", "UNITS", "check_counts", "mesh_is_blind",
+           "boundary_spacing"]
 
 UNITS = {"length": "m", "energy": "J", "stiffness": "N/m", "strain_per_length": "1/m",
          "angle": "rad", "force": "N"}
@@ -92,6 +93,7 @@ class PadGraspResult:
     n_nodes: int = 0
     e_L: float | None = None
     strain_at_sigma_star: float | None = None
+    blind: bool = False
     warnings: tuple[str, ...] = ()
     solver: PadContact | None = field(default=None, repr=False, compare=False)
 
@@ -123,8 +125,12 @@ class PadGraspResult:
 
     @property
     def verdict(self) -> str:
-        """``"held"`` iff quality > 0 (single mesh; ``--refine`` refines this)."""
-        return "held" if self.quality > 0 else "not held"
+        """``"held"`` iff quality > 0 on a mesh that resolves the pads (single mesh;
+        ``--refine`` refines this); a barrier on a blind mesh (:func:`mesh_is_blind`) is
+        ``"undecided"``."""
+        if self.quality <= 0:
+            return "not held"
+        return "undecided" if self.blind else "held"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready report (SPEC §6), SI; an infinite U_A is ``None`` + ``U_A_infinite``."""
@@ -266,7 +272,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         noise=tau(sig_n) * float(Us(sig_n)), noise_relative=tau(sig_n),
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=e_L,
-        strain_at_sigma_star=strain,
+        strain_at_sigma_star=strain, blind=mesh_is_blind(mesh, pad, hole),
         warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain), solver=solver)
 
 
@@ -349,13 +355,26 @@ def _range_warnings(strain: float | None) -> tuple[str, ...]:
     return ()
 
 
+def boundary_spacing(mesh, hole: int | None = None) -> float:
+    """Median distance (m) between neighbouring nodes of the outer loop (or of hole
+    ``hole``)."""
+    loop = mesh.outer_loop if hole is None else mesh.hole_loops[hole]
+    P = mesh.nodes[loop]
+    return float(np.median(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)))
+
+
+def mesh_is_blind(mesh, pad: Pad, hole: int | None = None) -> bool:
+    """Whether boundary nodes are farther apart than the pads' contact reach: the pads
+    then meet one node or none, energies follow the nodes, and a barrier read off such a
+    mesh is no evidence of holding (its verdict is "undecided" at best)."""
+    return boundary_spacing(mesh, hole) > pad.reach
+
+
 def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:
     """A warning when boundary nodes are farther apart than the pad's contact reach: the
     pads then meet one node or none, and energies follow the nodes (a large noise floor)."""
-    loop = mesh.outer_loop if hole is None else mesh.hole_loops[hole]
-    P = mesh.nodes[loop]
-    h = float(np.median(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)))
-    if h > pad.reach:
+    h = boundary_spacing(mesh, hole)
+    if mesh_is_blind(mesh, pad, hole):
         return (f"boundary nodes are {h:.3g} m apart, more than the pads' contact reach "
                 f"{pad.reach:.3g} m: refine the mesh (mesh.max_area) or use larger pads",)
     return ()

@@ -104,7 +104,7 @@ class RefinedPadGrasp:
         Q = [r.quality for r in self.levels]
         ext, err, _ = richardson(Q)
         if fine.quality > err and fine.quality > 0:
-            return "held"
+            return "undecided" if fine.blind else "held"   # a blind mesh is no evidence
         if fine.quality == 0 and ext <= 0:
             return "not held"
         return "undecided"

@@ -29,7 +29,7 @@ from ..pads.contact import GraspCurve, PadContact
 from ..pads.geometry import GraspAxis, Pad
 from ..pads.landscape import AxisGrid
 from ..pads.limit import elastic_limit_strain_of, pad_elastic_limit
-from ..pads.optimize import UNITS, check_counts, optimize_pads
+from ..pads.optimize import UNITS, check_counts, mesh_is_blind, optimize_pads
 
 __all__ = ["PadPlan", "plan_pads"]
 
@@ -283,8 +283,6 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             # where a coarser mesh is blind (no node within the pads' reach), finer ones
             res = _refined(part, ax, pad, levels, area, mesh, n_angles, n_offsets)
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
-            if verdict == "held" and _blind(fine.solver.mesh, pad):
-                verdict = "undecided"      # a barrier read off a blind mesh is no evidence
         else:
             fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin,
                                  n_angles=2 * n_angles, n_offsets=n_offsets)
@@ -310,7 +308,7 @@ def _refined(part, ax: GraspAxis, pad: Pad, levels: int, area: float, mesh, n_an
     opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
     coarse_area = area * 4.0 ** (levels - 1)
     coarse = mesh_part(part, max_area=coarse_area)
-    if not _blind(coarse, pad):
+    if not mesh_is_blind(coarse, pad):
         try:
             return pad_grasp(part, ax, pad, mesh=coarse, refine=levels, max_area=coarse_area,
                              **opts)
@@ -318,9 +316,3 @@ def _refined(part, ax: GraspAxis, pad: Pad, levels: int, area: float, mesh, n_an
             if "within the pads' reach" not in str(err):
                 raise
     return pad_grasp(part, ax, pad, mesh=mesh, refine=levels, max_area=area, **opts)
-
-
-def _blind(mesh, pad: Pad) -> bool:
-    """Whether the median boundary-node spacing exceeds the pads' contact reach."""
-    P = mesh.nodes[mesh.outer_loop]
-    return float(np.median(np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1))) > pad.reach
