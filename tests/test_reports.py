@@ -146,3 +146,15 @@ def test_a_drawing_and_its_material_file_travel_together(tmp_path):
     side = tmp_path / "gasket.material.json"
     side.write_text(side.read_text().replace("0.8", "0.7"))
     assert load_jobs(jobs_file)[0].key != jobs[0].key
+
+
+@pytest.mark.parametrize("command", ["check", "slice"])
+def test_a_missing_required_option_is_a_one_line_error(command, capsys):
+    """``check part.json`` without ``--fingers`` was a TypeError traceback (issue 23)."""
+    from deformclosure.cli.main import main
+
+    with pytest.raises(DeformClosureError, match=r"--fingers: required"):
+        reports.run(command, RECT, {})
+    assert main([command, str(RECT)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: --fingers: required")

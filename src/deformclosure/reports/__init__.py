@@ -67,5 +67,11 @@ def run(command: str, part, params: dict | None = None, *, progress=None, notify
         raise DeformClosureError(f"{command}: no parameter {unknown[0]!r}; the parameters are "
                                  f"{', '.join(full)}")
     full.update(params or {})
+    from .options import options_of
+
+    for opt in options_of(command):          # the CLI, batch and library callers alike
+        if opt.required and full.get(opt.name) is None:
+            raise DeformClosureError(f"{opt.flags[-1]}: required for {command}; see "
+                                     f"'deformclosure {command} --help'")
     module = importlib.import_module(f".{COMMANDS[command]}", __name__)
     return module.run(part, full, progress=progress, notify=notify)
