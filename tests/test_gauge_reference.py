@@ -51,6 +51,7 @@ from deformclosure.pads.contact import PadContact
 from deformclosure.pads.geometry import GraspAxis, Pad
 
 from pad_reference import stiffness_matrix as skfem_stiffness
+from shared_helpers import WorstMeasured
 
 MM = 1e-3
 E_MOD = 2e6                  # Pa
@@ -58,20 +59,9 @@ FLANK = np.radians(75.0)     # the package enforces contact where the surface is
                              # of the face (pads/geometry.py); the same candidates here
 
 # Worst relative differences seen, printed at the end of the module (pytest -s).
-WORST: dict[str, float] = {}
-
-
-def _record(key: str, value: float) -> None:
-    WORST[key] = max(WORST.get(key, 0.0), float(value))
-
-
-@pytest.fixture(scope="module", autouse=True)
-def _report_worst():
-    yield
-    if WORST:
-        print("\nworst measured (relative):")
-        for k in sorted(WORST):
-            print(f"  {k:<44s} {WORST[k]:.3e}")
+WORST = WorstMeasured("worst measured (relative)")
+_record = WORST.record
+_report_worst = WORST.fixture()
 
 
 # =========================================================================== parts

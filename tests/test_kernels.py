@@ -15,6 +15,7 @@ from collections import deque
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
+from shared_helpers import adjacency_sets
 
 SETTINGS = settings(max_examples=40, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -41,14 +42,8 @@ PLAN = ("planning._kernels", "planning.plan", "landscape.kernels")
 def graphs(draw, max_v=14):
     """A random undirected graph as symmetric CSR ``(indptr, indices)`` (int64), and its
     adjacency as Python sets."""
-    V = draw(st.integers(1, max_v))
-    pairs = draw(st.lists(st.tuples(st.integers(0, V - 1), st.integers(0, V - 1)),
-                          max_size=3 * V))
-    adj = [set() for _ in range(V)]
-    for a, b in pairs:
-        if a != b:
-            adj[a].add(b)
-            adj[b].add(a)
+    adj = draw(adjacency_sets(max_v))
+    V = len(adj)
     indptr = np.zeros(V + 1, np.int64)
     indptr[1:] = np.cumsum([len(s) for s in adj])
     order = draw(st.permutations(range(V)))          # neighbour order must not matter

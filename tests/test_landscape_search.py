@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from deformclosure.landscape import noise as nz
 from deformclosure.landscape.search import minimax_escape
+from shared_helpers import adjacency_sets
 
 SETTINGS = settings(max_examples=150, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -28,14 +29,8 @@ SETTINGS = settings(max_examples=150, deadline=None,
 def landscapes(draw, max_v=12, infinite=True):
     """A random undirected graph (adjacency lists in a random order), vertex energies with
     ties, plateaus and (optionally) inadmissible vertices, and a start vertex."""
-    V = draw(st.integers(1, max_v))
-    pairs = draw(st.lists(st.tuples(st.integers(0, V - 1), st.integers(0, V - 1)),
-                          max_size=3 * V))
-    adj = [set() for _ in range(V)]
-    for a, b in pairs:
-        if a != b:
-            adj[a].add(b)
-            adj[b].add(a)
+    adj = draw(adjacency_sets(max_v))
+    V = len(adj)
     order = draw(st.permutations(range(V)))
     rank = {v: i for i, v in enumerate(order)}
     nbrs = [sorted(s, key=rank.get) for s in adj]

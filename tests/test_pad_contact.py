@@ -28,25 +28,15 @@ from deformclosure.pads.geometry import GraspAxis, Pad
 from deformclosure.part import Material
 
 from pad_reference import pad_profile, reference_pad_solution
+from shared_helpers import WorstMeasured
 
 MM = 1e-3
 E, NU_BLOCK, NU_L, T = 2e6, 0.3, 0.35, 1 * MM
 
 # Worst relative differences seen, printed at the end of the module (pytest -s).
-WORST: dict[str, float] = {}
-
-
-def _record(key: str, value: float) -> None:
-    WORST[key] = max(WORST.get(key, 0.0), float(value))
-
-
-@pytest.fixture(scope="module", autouse=True)
-def _report_worst():
-    yield
-    if WORST:
-        print("\nworst measured (relative unless noted):")
-        for k in sorted(WORST):
-            print(f"  {k:<40s} {WORST[k]:.3e}")
+WORST = WorstMeasured("worst measured (relative unless noted)")
+_record = WORST.record
+_report_worst = WORST.fixture()
 
 
 # --------------------------------------------------------------------------- parts
