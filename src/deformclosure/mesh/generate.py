@@ -154,9 +154,12 @@ def _rings_with_points(part: Part, pts: np.ndarray, tol: float
 
 
 def _triangulate(rings: list[np.ndarray], interior_pts: np.ndarray, holes: tuple,
-                 min_angle: float, max_area: float) -> tuple[np.ndarray, np.ndarray]:
+                 min_angle: float, max_area: float, sizing=None
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Triangle's constrained quality triangulation of the rings (as segments) and the
-    interior points: node coordinates (m) and triangles, unused input vertices dropped."""
+    interior points: node coordinates (m) and triangles, unused input vertices dropped.
+    With ``sizing`` (a :class:`~deformclosure.mesh.sizing.Sizing`, in the frame of the
+    rings) the triangulation is refined until each triangle meets it at its centroid."""
     verts = np.concatenate(rings + [interior_pts])
     segs = []
     off = 0
@@ -173,9 +176,32 @@ def _triangulate(rings: list[np.ndarray], interior_pts: np.ndarray, holes: tuple
              f"S{limits.steiner_cap()}")  # a backstop: a wrong estimate cannot run away
     try:
         out = tr.triangulate(geom, flags)
+        if sizing is not None:
+            out = _refine_to(out, geom.get("holes"), sizing, min_angle)
     except Exception as err:  # the C library reports failures as generic errors
         raise MeshError(f"the mesher failed ({err}); check the part geometry and mesh options") from None
     return np.asarray(out["vertices"], float), np.asarray(out["triangles"], np.int64)
+
+
+def _refine_to(out: dict, holes, sizing, min_angle: float, passes: int = 12) -> dict:
+    """Refine Triangle's output ``out`` (quality ``min_angle``, segments kept) until every
+    triangle's area is within ``sizing`` at its centroid: Triangle's ``r`` + per-triangle
+    ``a`` switch, repeated because the new triangles' centroids move into finer regions."""
+    flags = f"rpq{np.format_float_positional(min_angle, trim='-')}aQS{limits.steiner_cap()}"
+    for _ in range(passes):
+        V, T = np.asarray(out["vertices"], float), np.asarray(out["triangles"])
+        P = V[T]
+        e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+        area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        want = sizing(P.mean(axis=1))
+        if np.all(area <= want * (1 + 1e-9)) or len(T) > limits.MAX_TRIANGLES:
+            break
+        geom = {"vertices": V, "triangles": T, "segments": out["segments"],
+                "triangle_max_area": want}
+        if holes is not None:
+            geom["holes"] = holes
+        out = tr.triangulate(geom, flags)
+    return out
 
 
 def _drop_unused(nodes: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -188,7 +214,7 @@ def _drop_unused(nodes: np.ndarray, tris: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None = None,
-              points: np.ndarray | None = None) -> Mesh:
+              points: np.ndarray | None = None, sizing=None) -> Mesh:
     """Quality-mesh a part with linear triangles.
 
     Parameters
@@ -202,6 +228,9 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
         Extra points (m) to insert as nodes, in addition to the part's ``mesh.points``.
         Points on the boundary (within the SPEC's touching tolerance, ``1e-9 ×`` the
         part's diameter) split the boundary edge they lie on.
+    sizing : Sizing, optional
+        Local areas (m², :class:`~deformclosure.mesh.sizing.Sizing`) below ``max_area``:
+        the mesh is refined until each triangle meets it (adaptive refinement, SPEC §6).
 
     Returns
     -------
@@ -237,7 +266,7 @@ def mesh_part(part: Part, max_area: float | None = None, min_angle: float | None
     field = "mesh.max_area" if from_file else "max_area"
     limits.check_mesh_size(new_rings, max_area, min_angle, interior_pts, units=units,
                            scale=scale, field=field)
-    nodes, tris = _triangulate(new_rings, interior_pts, part.holes, min_angle, max_area)
+    nodes, tris = _triangulate(new_rings, interior_pts, part.holes, min_angle, max_area, sizing)
     limits.check_mesh_result(len(tris), max_area, units=units, scale=scale, field=field)
     nodes, tris = _drop_unused(nodes, tris)
     mesh = Mesh.from_arrays(nodes, tris, material=part.material, name=part.name)
@@ -266,14 +295,15 @@ def _rot(angle: float) -> np.ndarray:
 
 
 def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
-              area_ratio: float = TWIN_AREA):
+              area_ratio: float = TWIN_AREA, sizing=None):
     """A second realisation of the part's mesh, returned in the part frame: the
     discretisation-noise measurement of every model (SPEC §6 "Noise floor").
 
     Meshed in a frame rotated by ``angle`` (rad) with ``area_ratio`` × the triangle area
     ``max_area`` (m², default the part's), so every node, boundary nodes included, sits
     elsewhere (Triangle splits a straight edge evenly, so a rotation alone would reproduce
-    the boundary nodes).
+    the boundary nodes). ``sizing`` (part frame) refines it locally as the main mesh, its
+    areas times ``area_ratio`` too.
     """
     c = part.outer.mean(axis=0)
     R = _rot(angle)
@@ -283,4 +313,8 @@ def twin_mesh(part, max_area: float | None = None, angle: float = TWIN_ANGLE,
     rpart = replace(part, outer=rot(part.outer), holes=tuple(rot(h) for h in part.holes),
                     mesh_options=replace(opts, points=rot(pts) if len(pts) else opts.points))
     area = default_max_area(part) if max_area is None else max_area
-    return mesh_part(rpart, max_area=area * area_ratio).rotated(-angle, c)
+    local = None
+    if sizing is not None:
+        back = _rot(-angle)
+        local = lambda P: area_ratio * sizing((np.asarray(P, float) - c) @ back.T + c)  # noqa: E731
+    return mesh_part(rpart, max_area=area * area_ratio, sizing=local).rotated(-angle, c)

@@ -125,6 +125,11 @@ class AxisGrid:
             out.append(self.vertex(ii, jj))
         return out
 
+    def start_neighbours(self, v: int) -> list[int]:
+        """The neighbours of the start's strictness test (here all grid neighbours; a grid
+        refined around saddles keeps the coarse ones, :mod:`.saddle_grid`)."""
+        return self.neighbours(v)
+
 
 @dataclass(frozen=True)
 class Release:
@@ -244,7 +249,7 @@ class Landscape:
             return E[v]
 
         Us = U(start)
-        if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.neighbours(start)):
+        if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.start_neighbours(start)):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
         esc = minimax_escape(start, g.neighbours, U)       # SPEC §4's exact equilibrium test

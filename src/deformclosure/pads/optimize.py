@@ -23,6 +23,7 @@ from .geometry import GraspAxis, Pad
 from ..landscape.optimum import maximise_quality
 from .landscape import AxisGrid, Landscape, Release
 from .noise import jitter_noise
+from .saddle_grid import SaddleRefinedGrid
 from .limit import (LINEAR_STRAIN_RANGE, PadLimit, elastic_limit_strain_of,
                     pad_elastic_limit, pad_strain_at)
 
@@ -67,6 +68,11 @@ class PadGraspResult:
         grasp the growth of the force with the opening).
     n_axes : int
         Number of axes whose contact problem was solved.
+    grid : AxisGrid or SaddleRefinedGrid
+        The landscape's grid of axes (refined around earlier saddles when adaptive).
+    saddle : GraspAxis or None
+        The escape path's highest axis at σ* (``None`` without a finite barrier): where
+        the next level refines the landscape.
     strain_at_sigma_star : float or None
         The strain measure of SPEC §6 at σ* (dimensionless); above
         :data:`~deformclosure.pads.limit.LINEAR_STRAIN_RANGE` a warning says that linear
@@ -96,6 +102,7 @@ class PadGraspResult:
     blind: bool = False
     warnings: tuple[str, ...] = ()
     solver: PadContact | None = field(default=None, repr=False, compare=False)
+    saddle: GraspAxis | None = None
 
     @property
     def force(self) -> float | None:
@@ -159,14 +166,21 @@ class PadGraspResult:
             "mode": "expanding" if self.start_curve.expanding else "contracting",
             "warnings": list(self.warnings),
             "escape_path": [ax.to_dict() for ax in self.escape_path],
-            "grid": {"d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
-                     "n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets},
+            "grid": _grid_dict(self.grid),
             "n_axes_solved": self.n_axes,
             "nodes": self.n_nodes,
             "energy_model": "linear",
             "curve": self.curve,
             "units": UNITS,
         }
+
+
+def _grid_dict(grid) -> dict:
+    """The report's ``grid``: spacing and counts, and the saddle refinement if any."""
+    if hasattr(grid, "to_dict"):
+        return grid.to_dict()
+    return {"d_angle": grid.d_angle, "d_offset": grid.d_offset, "n_angles": grid.n_angles,
+            "n_offsets": grid.n_offsets, "refinement": 1, "patches": 0, "patch_vertices": 0}
 
 
 @dataclass
@@ -193,7 +207,8 @@ class _Eval:
 def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None = None,
                   twin: PadContact | None = None, hole: int | None = None,
                   twin_hole: int | None = None, n_angles: int = 48, n_offsets: int = 50,
-                  n_samples: int = 48, n_curve: int = 120, noise: bool = True) -> PadGraspResult:
+                  n_samples: int = 48, n_curve: int = 120, noise: bool = True,
+                  saddles: tuple[int, list] | None = None) -> PadGraspResult:
     """Optimal separation ``σ* = argmax min(U_A, U_L)`` of a two-pad grasp on ``axis``.
 
     Parameters
@@ -218,6 +233,10 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         σ samples that start the exact search, and of the plotted curve (each at least 2).
     noise : bool
         Measure and use the landscape's noise floor (see :mod:`.noise`).
+    saddles : (int, list of GraspAxis), optional
+        ``(factor, axes)``: refine the landscape grid ``factor`` times around these axes
+        (:class:`~deformclosure.pads.saddle_grid.SaddleRefinedGrid`; the saddles of a
+        coarser level).
 
     Returns
     -------
@@ -250,7 +269,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     limit = pad_elastic_limit(solver, start_curve, e_L)
     sigma_L = limit.sigma_L
     land, start_axis = _landscape(solver, axis, pad, start_curve, sigma_L, hole, n_angles,
-                                  n_offsets)
+                                  n_offsets, saddles)
     grid, s, Us = land.grid, land.grid.vertex(0, 0), start_curve.energy_at
     tau = _noise_floor(land, start_axis, twin, twin_hole) if noise else (lambda sig: 0.0)
     U_sL = float(Us(sigma_L))
@@ -259,7 +278,9 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     curve = _sample_curve(land, s, Us, U_sL, sigma_L, sigma0, tau, n_curve, sigma_star,
                           start_curve.axial_force)
     rel = e_star.release
-    path = [grid.axis(v) for v in rel.path] if rel.strict and math.isfinite(rel.U_A) else []
+    barrier = rel.strict and math.isfinite(rel.U_A) and sigma_star is not None
+    path = [grid.axis(v) for v in rel.path] if barrier else []
+    saddle = grid.axis(rel.saddle) if barrier and rel.saddle is not None else None
     contacts = np.array([start_curve.touch.contact_a, start_curve.touch.contact_b])
     strain = (None if sigma_star is None
               else pad_strain_at(solver, start_curve, sigma_star, limit.critical_distance))
@@ -273,17 +294,21 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=e_L,
         strain_at_sigma_star=strain, blind=mesh_is_blind(mesh, pad, hole),
-        warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain), solver=solver)
+        warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain), solver=solver,
+        saddle=saddle)
 
 
 def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: GraspCurve,
-               sigma_L: float, hole: int | None, n_angles: int, n_offsets: int
-               ) -> tuple[Landscape, GraspAxis]:
+               sigma_L: float, hole: int | None, n_angles: int, n_offsets: int,
+               saddles: tuple[int, list] | None = None) -> tuple[Landscape, GraspAxis]:
     """The release landscape of ``axis`` traced to ``sigma_L`` (m), its start (vertex
     ``(0, 0)``) seeded with ``start_curve``, and the start axis re-anchored at the area
-    centroid, so that the grid's wrap ``(θ + π, −c)`` is exact."""
+    centroid, so that the grid's wrap ``(θ + π, −c)`` is exact; refined around
+    ``saddles`` = ``(factor, axes)`` when given."""
     start_axis = GraspAxis.at(axis.point, axis.angle, solver.centroid)
     grid = AxisGrid.over_part(solver, start_axis, pad, n_angles, n_offsets)
+    if saddles is not None and saddles[0] > 1 and saddles[1]:
+        grid = SaddleRefinedGrid.around(grid, saddles[0], saddles[1])
     land = Landscape(solver, pad, grid, sigma_L, hole)
     land.seed(grid.vertex(0, 0), start_curve)
     return land, start_axis

@@ -1,36 +1,52 @@
-"""Pad grasps under mesh refinement: convergence table, Richardson error, verdict (SPEC §6).
+"""Pad grasps refined to a stated accuracy: levels, error estimates, verdict (SPEC §6
+"Accuracy by default").
 
-``--refine N`` solves the same grasp on ``N`` meshes, the triangle area quartered each
-time (``h`` halved). From the last three qualities ``Q₁, Q₂, Q₃`` the observed order is
-``p = log₂(|Q₁ − Q₂| / |Q₂ − Q₃|)`` (clipped to [0.5, 4]) and the Richardson extrapolation
-``Q∞ = Q₃ + (Q₃ − Q₂)/(2^p − 1)``; the error estimate is ``|Q∞ − Q₃|``, the same for σ*.
-With two meshes ``p = 1`` is assumed (the rate of the CST energy under a point-like contact
-singularity is about 1, and p = 1 is the cautious choice among the rates seen).
+A pad grasp has two discretisations: the mesh (h) and the release landscape's grid of
+axes. Each level refines both — the mesh (uniformly, ``h`` halved, with ``--refine N``;
+adaptively by default, :mod:`.adapt`) and the landscape around the saddles found so far
+(:mod:`.saddle_grid`, the grid there ``2^k`` times finer at level ``k``) — so one sequence
+of levels carries the error of both.
 
-Verdict: ``"held"`` when the finest quality exceeds its error estimate; ``"not held"``
-when the finest mesh has no barrier (``Q = 0``) and the extrapolation does not bring one
-back (``Q∞ ≤ 0``); otherwise ``"undecided"``: the release energy is within its error of 0.
+**Error estimate.** From the values ``X₁ … X_k`` of ``quality``, ``U_A`` and ``sigma_star``
+on the levels, the Richardson estimate of :func:`richardson` (observed order from three
+levels, ``p = 1`` from two), never less than the last change ``|X_k − X_{k−1}|``: a
+sequence that does not shrink monotonically gets no credit for it. The estimate is a
+claim about the next level; the tests check that it brackets a much finer answer.
+
+**Refinement to ``rtol``** (default 0.05): levels are added until the estimate of Q* and of
+U_A is at most ``rtol`` times its value (a grasp with no barrier on two levels in a row
+has nothing left to resolve), or until the budget ends it — ``max_seconds`` (the next
+level's time predicted from the last two) or the memory limits of the pads model; the
+report then says ``converged: false``.
+
+**Verdict** (SPEC §6): ``"held"`` when U_A minus its error exceeds the noise floor (on a
+mesh that resolves the pads, :func:`~deformclosure.pads.optimize.mesh_is_blind`);
+``"not held"`` when U_A plus its error is within the noise floor (no barrier, or none
+beyond the error); otherwise ``"undecided"``. A single mesh has no estimate: its verdict
+is the mesh's own.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..errors import GraspError
+from ..errors import DeformClosureError, GraspError
 from ..log import done
 from ..mesh import mesh_part
-from ..mesh.generate import default_max_area
+from ..mesh.generate import default_max_area, twin_mesh
+from ..mesh.sizing import Sizing
+from .adapt import first_sizing, next_sizing
 from .contact import PadContact, hole_containing
 from .geometry import GraspAxis, Pad
-from ..mesh.generate import twin_mesh
 from .optimize import PadGraspResult, optimize_pads
 
-__all__ = ["RefinedPadGrasp", "richardson", "pad_grasp"]
+__all__ = ["RefinedPadGrasp", "richardson", "pad_grasp", "level_error", "check_accuracy",
+           "DEFAULT_RTOL", "DEFAULT_MAX_SECONDS"]
 
 #: Keyword options :func:`pad_grasp` passes on to :func:`optimize_pads`.
 _OPTIONS = frozenset({"n_angles", "n_offsets", "n_samples", "n_curve", "noise"})
@@ -73,27 +89,90 @@ def richardson(values: list[float]) -> tuple[float, float, float | None]:
     return ext, abs(ext - v[-1]), order
 
 
+#: Default relative accuracy of ``quality`` and ``U_A`` (``--rtol``).
+DEFAULT_RTOL = 0.05
+
+#: Default time budget (s) of a refinement (``--max-seconds``).
+DEFAULT_MAX_SECONDS = 120.0
+
+#: Most levels a refinement solves.
+MAX_LEVELS = 6
+
+
+def level_error(values: list[float]) -> float | None:
+    """Error estimate of the last of ``values`` (module docstring); ``None`` with one
+    value, ``inf`` when the last two differ in being infinite."""
+    if len(values) < 2:
+        return None
+    v = [float(x) for x in values]
+    if math.isinf(v[-1]) or math.isinf(v[-2]):
+        return 0.0 if v[-1] == v[-2] else math.inf
+    tail = v[-3:] if len(v) >= 3 and math.isfinite(v[-3]) else v[-2:]
+    return max(richardson(tail)[1], abs(v[-1] - v[-2]))
+
+
 @dataclass(frozen=True, eq=False)
 class RefinedPadGrasp:
-    """A pad grasp solved on a refinement sequence; the finest result is the answer."""
+    """A pad grasp solved on a sequence of levels; the finest result is the answer.
+
+    Attributes
+    ----------
+    levels : list of PadGraspResult
+        Coarsest first.
+    max_areas : list of float
+        Largest triangle area (m²) of each level's mesh.
+    rtol : float or None
+        The accuracy asked for (``None``: a fixed number of levels, ``--refine``).
+    converged : bool
+        Whether the estimates of Q* and U_A met ``rtol`` (with ``--refine``: the default
+        rtol) before the levels or the budget ran out.
+    adaptive : bool
+        Whether the meshes were refined adaptively.
+    stopped : str or None
+        Why refinement ended before converging (time, memory, levels).
+    """
 
     levels: list[PadGraspResult]
     max_areas: list[float]
+    rtol: float | None = None
+    adaptive: bool = False
+    stopped: str | None = None
+    seconds: list[float] = field(default_factory=list)
 
     @property
     def finest(self) -> PadGraspResult:
-        """The result on the finest mesh."""
+        """The result on the finest level."""
         return self.levels[-1]
 
+    def _values(self, key: str) -> list[float]:
+        if key == "U_A":
+            return [r.U_A for r in self.levels]
+        if key == "quality":
+            return [r.quality for r in self.levels]
+        return [r.sigma_star for r in self.levels]
+
     def error_estimate(self) -> dict[str, float | None]:
-        """Richardson error estimates of quality (J) and σ* (m)."""
+        """Error estimates of ``quality`` (J), ``U_A`` (J) and ``sigma_star`` (m)."""
         if len(self.levels) < 2:
-            return {"quality": None, "sigma_star": None}
-        Q = [r.quality for r in self.levels]
-        _, eQ, _ = richardson(Q)
-        S = [r.sigma_star for r in self.levels]
-        eS = richardson(S)[1] if all(s is not None for s in S) else None
-        return {"quality": eQ, "sigma_star": eS}
+            return {"quality": None, "U_A": None, "sigma_star": None}
+        S = self._values("sigma_star")
+        if all(s is None for s in S[-2:]):
+            eS = 0.0
+        elif any(s is None for s in S[-2:]):
+            eS = None                     # a barrier on one level only: σ* is not located
+        else:
+            tail = S[-3:] if len(S) >= 3 and S[-3] is not None else S[-2:]
+            eS = level_error(tail)
+        return {"quality": level_error(self._values("quality")),
+                "U_A": level_error(self._values("U_A")), "sigma_star": eS}
+
+    @property
+    def converged(self) -> bool:
+        """Whether Q* and U_A are within ``rtol`` (default :data:`DEFAULT_RTOL`)."""
+        if len(self.levels) < 2:
+            return False
+        return _within(self.error_estimate(), self.finest,
+                       DEFAULT_RTOL if self.rtol is None else self.rtol)
 
     @property
     def verdict(self) -> str:
@@ -101,54 +180,91 @@ class RefinedPadGrasp:
         fine = self.finest
         if len(self.levels) < 2:
             return fine.verdict
-        Q = [r.quality for r in self.levels]
-        ext, err, _ = richardson(Q)
-        if fine.quality > err and fine.quality > 0:
-            return "undecided" if fine.blind else "held"   # a blind mesh is no evidence
-        if fine.quality == 0 and ext <= 0:
+        e = self.error_estimate()
+        ua, eua = fine.U_A, e["U_A"]
+        floor = fine.noise
+        if math.isinf(ua):
+            return "held" if eua == 0.0 and not fine.blind and fine.quality > 0 else "undecided"
+        if fine.quality > 0 and ua - eua > floor and not fine.blind:
+            return "held"
+        if ua + eua <= floor:
             return "not held"
         return "undecided"
 
     def to_dict(self) -> dict[str, Any]:
-        """The finest report plus ``error_estimate``, ``convergence`` and the verdict."""
+        """The finest report plus ``error_estimate``, ``converged``, ``convergence`` and the
+        verdict."""
         d = self.finest.to_dict()
-        if len(self.levels) > 1:
-            d["error_estimate"] = self.error_estimate()
-            d["convergence"] = [
-                {"max_area": a, "nodes": r.n_nodes, "sigma_star": r.sigma_star,
-                 "quality": r.quality, "U_A": None if math.isinf(r.U_A) else r.U_A,
-                 "sigma0": r.sigma0, "sigma_L": r.sigma_L, "force": r.force}
-                for a, r in zip(self.max_areas, self.levels)]
-            d["verdict"] = self.verdict
+        d["error_estimate"] = self.error_estimate()
+        d["converged"] = self.converged
+        d["rtol"] = self.rtol
+        d["refinement"] = ("adaptive" if self.adaptive else "uniform") if len(self.levels) > 1 \
+            else "none"
+        if self.stopped:
+            d["stopped"] = self.stopped
+        d["convergence"] = [
+            {"level": k, "nodes": r.n_nodes, "grid": r.to_dict()["grid"],
+             "sigma_star": r.sigma_star, "quality": r.quality,
+             "U_A": None if math.isinf(r.U_A) else r.U_A, "U_A_infinite": math.isinf(r.U_A),
+             "max_area": a, "sigma0": r.sigma0, "sigma_L": r.sigma_L, "force": r.force,
+             "n_axes_solved": r.n_axes}
+            for k, (a, r) in enumerate(zip(self.max_areas, self.levels))]
+        d["verdict"] = self.verdict
         return d
 
 
-def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
-              twin: bool = True, expanding_from=None, progress=None,
+def _within(err: dict, fine: PadGraspResult, rtol: float) -> bool:
+    """Whether the estimates of quality and U_A are within ``rtol`` of their values."""
+    for key, value in (("quality", fine.quality), ("U_A", fine.U_A)):
+        e = err[key]
+        if e is None or math.isnan(e):
+            return False
+        if math.isinf(value):
+            if e != 0.0:
+                return False
+            continue
+        if e > rtol * abs(value):
+            return False
+    return True
+
+
+def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int | None = None,
+              rtol: float | None = None, max_seconds: float | None = None,
+              adaptive: bool = True, twin: bool = True, expanding_from=None, progress=None,
               max_area: float | None = None, **options) -> RefinedPadGrasp:
-    """Optimal separation of a pad grasp, on one mesh or a refinement sequence.
+    """Optimal separation of a pad grasp: on one mesh, on ``refine`` uniform levels, or
+    refined until ``rtol`` is met (module docstring).
 
     Parameters
     ----------
     part : Part or None
-        The part (needed for ``refine > 1`` and for the twin realisation).
+        The part (needed to refine and for the twin realisation).
     axis : GraspAxis
         Start axis in the part frame (angle in rad, offset in m).
     pad : Pad
         Width and end radius in m.
     mesh : Mesh, optional
-        The first mesh (default: the part meshed with its own settings).
-    refine : int
-        Number of meshes (``max_area`` quartered each time), 1 to 5.
+        The first mesh of a single or uniform run (default: the part meshed with its own
+        settings); an adaptive run makes its own first level.
+    refine : int, optional
+        Number of uniform levels (``max_area`` quartered each time), 1 to 5; exclusive
+        with ``rtol``. Neither given: one mesh.
+    rtol : float, optional
+        Relative accuracy of Q* and U_A to refine to, in (0, 1) (``--rtol``).
+    max_seconds : float, optional
+        Time budget (s) of an ``rtol`` run (default :data:`DEFAULT_MAX_SECONDS`).
+    adaptive : bool
+        With ``rtol``: refine the mesh where the error indicator is largest (default)
+        rather than everywhere.
     twin : bool
         Measure the noise floor on a second mesh realisation (needs ``part``).
     expanding_from : array_like, optional
         Expanding grasp: a point (m) inside the hole the pads open in.
     progress : callable, optional
-        Called with ``(level, n_levels)`` before each level.
+        Called with ``(level, n_levels)`` before each level (``n_levels`` the most
+        levels of the run).
     max_area : float, optional
-        Largest triangle area (m²) of the first level (default the part's own); each
-        further level quarters it. ``mesh``, when given, must be that first level.
+        Largest triangle area (m²) of the first level (default the part's own).
     **options
         Passed to :func:`optimize_pads`: ``n_angles``, ``n_offsets``, ``n_samples``,
         ``n_curve``, ``noise``.
@@ -156,14 +272,14 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
     Returns
     -------
     RefinedPadGrasp
-        One :class:`PadGraspResult` per mesh (σ in m, energies in J), the finest last,
-        with the Richardson error estimate and the verdict.
+        One :class:`PadGraspResult` per level (σ in m, energies in J), the finest last,
+        with the error estimates and the verdict.
 
     Raises
     ------
     GraspError
-        A bad ``refine``, ``axis``, ``pad`` or option, no part or mesh, a point not in a
-        hole, or any refusal of :func:`optimize_pads`.
+        A bad ``refine``, ``rtol``, ``max_seconds``, ``axis``, ``pad`` or option, no part
+        or mesh, a point not in a hole, or any refusal of :func:`optimize_pads`.
 
     Examples
     --------
@@ -179,7 +295,11 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
     >>> res.verdict, round(res.finest.sigma0 * 1e3, 3)              # mm
     ('held', 7.657)
     """
-    _check_request(part, axis, pad, refine, options)
+    _check_request(part, axis, pad, refine, rtol, max_seconds, options)
+    if rtol is not None and part is not None:
+        return _to_rtol(part, axis, pad, float(rtol), adaptive,
+                        DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds),
+                        twin, expanding_from, progress, max_area, options)
     if mesh is None:
         if part is None:
             raise GraspError("part: give a part or a mesh")
@@ -188,26 +308,115 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int = 1,
         base = float(max_area)
     else:
         base = default_max_area(part) if part is not None else float(mesh.areas.max())
-    levels, areas = [], []
-    for k in range(refine):
+    n = 1 if refine is None else refine
+    levels, areas, seconds = [], [], []
+    saddles: list[GraspAxis] = []
+    for k in range(n):
         if progress is not None:
-            progress(k, refine)
+            progress(k, n)
         area = base / 4.0**k
-        m = mesh if k == 0 else mesh_part(part, max_area=area)
-        tw = PadContact(twin_mesh(part, max_area=area)) if (twin and part is not None) else None
-        holes = {} if expanding_from is None else _holes(m, tw, expanding_from)
         t0 = time.perf_counter()
-        levels.append(optimize_pads(m, axis, pad, twin=tw, **holes, **options))
+        m = mesh if k == 0 else mesh_part(part, max_area=area)
+        tw = twin_mesh(part, max_area=area) if (twin and part is not None) else None
+        levels.append(_solve_level(m, tw, axis, pad, k, saddles, expanding_from, options))
         areas.append(area)
-        done("mesh %d of %d (%d nodes): Q* = %.6g J, %d grasp axes solved", t0,
-             k + 1, refine, m.n_nodes, levels[-1].quality, levels[-1].n_axes)
-    return RefinedPadGrasp(levels, areas)
+        seconds.append(time.perf_counter() - t0)
+        _log_level(t0, k, n, levels[-1])
+    return RefinedPadGrasp(levels, areas, None, False, None, seconds)
 
 
-def _check_request(part, axis, pad, refine, options: dict) -> None:
-    """Refuse a bad ``refine``, ``axis``, ``pad`` or option of :func:`pad_grasp`."""
-    if isinstance(refine, bool) or not (isinstance(refine, int) and 1 <= refine <= 5):
+def _solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
+                 expanding_from, options: dict) -> PadGraspResult:
+    """Level ``k``: the grasp on ``mesh`` (twin ``twin_m``), its landscape refined ``2^k``
+    times around ``saddles`` (the earlier levels' saddles, to which this one's is added)."""
+    tw = PadContact(twin_m) if twin_m is not None else None
+    holes = {} if expanding_from is None else _holes(mesh, tw, expanding_from)
+    refined = (2**k, list(saddles)) if k > 0 and saddles else None
+    res = optimize_pads(mesh, axis, pad, twin=tw, saddles=refined, **holes, **options)
+    if res.saddle is not None:
+        saddles.append(res.saddle)
+    return res
+
+
+def _log_level(t0: float, k: int, n: int, res: PadGraspResult) -> None:
+    done("level %d of at most %d (%d nodes): Q* = %.6g J, %d grasp axes solved", t0,
+         k + 1, n, res.n_nodes, res.quality, res.n_axes)
+
+
+def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
+             max_seconds: float, twin: bool, expanding_from, progress, max_area,
+             options: dict) -> RefinedPadGrasp:
+    """Levels until the estimates of Q* and U_A are within ``rtol`` (module docstring)."""
+    from .size_limits import check_pads_size
+
+    t_start = time.perf_counter()
+    base = float(max_area) if max_area is not None else default_max_area(part)
+    hole_ring = None
+    if expanding_from is not None:
+        probe = mesh_part(part, max_area=base)
+        h = hole_containing(probe, expanding_from)
+        hole_ring = None if h is None else probe.nodes[probe.hole_loops[h]]
+    sizing = first_sizing(part, axis, pad, base, hole_ring) if adaptive else Sizing(base)
+    levels, areas, seconds, saddles = [], [], [], []
+    stopped = None
+    for k in range(MAX_LEVELS):
+        if progress is not None:
+            progress(k, MAX_LEVELS)
+        t0 = time.perf_counter()
+        try:
+            mesh = mesh_part(part, max_area=sizing.default, sizing=sizing)
+            check_pads_size(mesh, solvers=2 if twin else 1, refine=1)
+        except DeformClosureError as err:
+            if not levels:
+                raise
+            stopped = f"memory or size limit at level {k + 1}: {err}"
+            break
+        tw = twin_mesh(part, max_area=sizing.default, sizing=sizing) if twin else None
+        levels.append(_solve_level(mesh, tw, axis, pad, k, saddles, expanding_from, options))
+        areas.append(float(mesh.areas.max()))
+        seconds.append(time.perf_counter() - t0)
+        _log_level(t0, k, MAX_LEVELS, levels[-1])
+        run = RefinedPadGrasp(levels, areas, rtol, adaptive, None, seconds)
+        if run.converged:
+            return run
+        if k + 1 == MAX_LEVELS:
+            stopped = f"{MAX_LEVELS} levels solved"
+            break
+        growth = seconds[-1] / seconds[-2] if len(seconds) > 1 and seconds[-2] > 0 else 4.0
+        predicted = seconds[-1] * min(max(growth, 1.5), 16.0)
+        if time.perf_counter() - t_start + predicted > max_seconds:
+            stopped = (f"time budget: level {k + 2} would take about {predicted:.0f} s, beyond "
+                       f"--max-seconds {max_seconds:g}")
+            break
+        sizing = next_sizing(levels[-1], sizing) if adaptive else Sizing(sizing.default / 4.0)
+    return RefinedPadGrasp(levels, areas, rtol, adaptive, stopped, seconds)
+
+
+def check_accuracy(rtol, max_seconds) -> None:
+    """Refuse an ``rtol`` outside (0, 1) or a ``max_seconds`` that is not a time > 0
+    (``None``: the default)."""
+    if rtol is not None:
+        if isinstance(rtol, bool) or not isinstance(rtol, (int, float)) \
+                or not (math.isfinite(rtol) and 0 < rtol < 1):
+            raise GraspError(f"--rtol = {rtol!r}: give a relative accuracy between 0 and 1 "
+                             "(e.g. 0.05)")
+    if max_seconds is not None:
+        if isinstance(max_seconds, bool) or not isinstance(max_seconds, (int, float)) \
+                or not (math.isfinite(max_seconds) and max_seconds > 0):
+            raise GraspError(f"--max-seconds = {max_seconds!r}: give a time budget in "
+                             "seconds > 0")
+
+
+def _check_request(part, axis, pad, refine, rtol, max_seconds, options: dict) -> None:
+    """Refuse a bad ``refine``, ``rtol``, ``max_seconds``, ``axis``, ``pad`` or option of
+    :func:`pad_grasp`."""
+    if refine is not None and rtol is not None:
+        raise GraspError("--refine and --rtol: give one (--refine N solves N uniform levels; "
+                         "--rtol R refines until the error estimate is within R)")
+    if refine is not None and (isinstance(refine, bool) or not (isinstance(refine, int)
+                                                                and 1 <= refine <= 5)):
         raise GraspError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
+    check_accuracy(rtol, max_seconds)
     if not isinstance(axis, GraspAxis):
         raise GraspError(f"axis = {axis!r}: give a GraspAxis (angle in rad, offset in m)")
     if not isinstance(pad, Pad):
@@ -216,7 +425,7 @@ def _check_request(part, axis, pad, refine, options: dict) -> None:
     if unknown:
         raise GraspError(f"{unknown[0]}: not an option of a pad grasp; use "
                          f"{', '.join(sorted(_OPTIONS))}")
-    if part is None and refine > 1:
+    if part is None and refine is not None and refine > 1:
         raise GraspError("--refine: needs a part file (a mesh file cannot be re-meshed)")
 
 

@@ -29,7 +29,7 @@ from ..pads.contact import GraspCurve, PadContact
 from ..pads.geometry import GraspAxis, Pad
 from ..pads.landscape import AxisGrid
 from ..pads.limit import elastic_limit_strain_of, pad_elastic_limit
-from ..pads.optimize import UNITS, check_counts, mesh_is_blind, optimize_pads
+from ..pads.optimize import UNITS, check_counts, optimize_pads
 
 __all__ = ["PadPlan", "plan_pads"]
 
@@ -95,7 +95,7 @@ def _grid_graph(grid: AxisGrid) -> sp.csr_matrix:
 def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigma: int = 64,
               top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
               solver: PadContact | None = None, progress=None, part=None,
-              verify_levels: int = 2) -> PadPlan:
+              rtol: float | None = None, max_seconds: float | None = None) -> PadPlan:
     """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
 
     Parameters
@@ -122,13 +122,16 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         ``progress(done, total)`` while the axes are solved.
     part : Part, optional
         The part ``mesh`` was made from (with its own ``max_area``): verification then
-        solves each candidate on ``verify_levels`` meshes, ``mesh`` the finest and ``h``
-        doubled for each coarser one, with the error estimate and the verdict of
-        :class:`~deformclosure.pads.refine.RefinedPadGrasp`; without it, on
-        ``mesh`` alone (no error estimate: the verdict is "held" only for a barrier above
-        the noise floor on that mesh).
-    verify_levels : int
-        Meshes per verified candidate (1 to 5).
+        refines each candidate to ``rtol`` with the code path of ``optimize``
+        (:func:`~deformclosure.pads.refine.pad_grasp`: mesh and landscape, adaptively,
+        with the error estimate and the verdict of
+        :class:`~deformclosure.pads.refine.RefinedPadGrasp`); without it, on ``mesh``
+        alone (no error estimate: the verdict is "held" only for a barrier above the
+        noise floor on that mesh, and never on a blind mesh).
+    rtol : float, optional
+        Relative accuracy of each verified candidate (default 0.05).
+    max_seconds : float, optional
+        Time budget (s) of all verifications together (default 120), shared equally.
 
     Returns
     -------
@@ -177,7 +180,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
             for v, c in enumerate(curves) if c.touch is not None]
     rows.sort(key=lambda r: -r["quality"])
     refined = _verify_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets, part,
-                           verify_levels)
+                           rtol, max_seconds)
     # verified rows first (held, then undecided, then not held), then the candidates
     order = {"held": 0, "undecided": 1, "not held": 2, "candidate": 3}
     rows.sort(key=lambda r: (not r["verified"], order[r["verdict"]] if r["verified"] else 0,
@@ -266,53 +269,32 @@ def screened_verdict(quality: float) -> str:
 
 
 def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
-                 n_angles: int, n_offsets: int, part, levels: int) -> list:
-    """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`,
-    grid anchored at each axis, twice the plan's angular resolution), updating them in
-    place; stops at the first row that shows no barrier."""
+                 n_angles: int, n_offsets: int, part, rtol: float | None,
+                 max_seconds: float | None) -> list:
+    """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`
+    to ``rtol``, grid anchored at each axis, twice the plan's angular resolution), updating
+    them in place; stops at the first row that shows no barrier."""
+    from ..pads.refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, pad_grasp
     from ..mesh.generate import default_max_area
 
-    area = default_max_area(part) if part is not None else None
+    first_gap = next((k for k, r in enumerate(rows) if r["quality"] <= 0), len(rows))
+    candidates = rows[:first_gap]
+    budget = (DEFAULT_MAX_SECONDS if max_seconds is None else max_seconds) / max(len(candidates), 1)
+    opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
     verified = []
-    for r in rows:
-        if r["quality"] <= 0:
-            break
+    for r in candidates:
         ax = GraspAxis(r["angle"], r["offset"], tuple(solver.centroid))
-        if part is not None and levels > 1:
-            # the plan's own mesh is the finest level and the coarser ones give the error;
-            # where a coarser mesh is blind (no node within the pads' reach), finer ones
-            res = _refined(part, ax, pad, levels, area, mesh, n_angles, n_offsets)
+        if part is not None:
+            res = pad_grasp(part, ax, pad, rtol=DEFAULT_RTOL if rtol is None else rtol,
+                            max_seconds=budget, max_area=default_max_area(part), **opts)
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
+            extra = {"converged": res.converged, "n_levels": len(res.levels)}
         else:
-            fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin,
-                                 n_angles=2 * n_angles, n_offsets=n_offsets)
-            err, verdict = {"quality": None, "sigma_star": None}, fine.verdict
+            fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, **opts)
+            err = {"quality": None, "U_A": None, "sigma_star": None}
+            verdict, extra = fine.verdict, {"converged": False, "n_levels": 1}
         r.update({"sigma_star": fine.sigma_star, "quality": fine.quality, "verdict": verdict,
                   "verified": True, "method": "exact", "lattice_quality": r["quality"],
-                  "error_estimate": err, "force": fine.force,
-                  "n_levels": levels if part is not None else 1})
+                  "error_estimate": err, "force": fine.force, **extra})
         verified.append(fine)
     return verified
-
-
-def _refined(part, ax: GraspAxis, pad: Pad, levels: int, area: float, mesh, n_angles: int,
-             n_offsets: int):
-    """:func:`pad_grasp` of one candidate on ``levels`` meshes ending at the plan's
-    (``h`` doubling below it), or starting at it (``h`` halving) when the plan's mesh or a
-    coarser one is blind: boundary nodes farther apart than the pads' contact reach, so
-    that energies follow the nodes, not the part."""
-    from ..pads.refine import pad_grasp
-
-    from ..mesh import mesh_part
-
-    opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
-    coarse_area = area * 4.0 ** (levels - 1)
-    coarse = mesh_part(part, max_area=coarse_area)
-    if not mesh_is_blind(coarse, pad):
-        try:
-            return pad_grasp(part, ax, pad, mesh=coarse, refine=levels, max_area=coarse_area,
-                             **opts)
-        except GraspError as err:
-            if "within the pads' reach" not in str(err):
-                raise
-    return pad_grasp(part, ax, pad, mesh=mesh, refine=levels, max_area=area, **opts)

@@ -62,7 +62,8 @@ def _pads(part, p: dict, notify) -> Report:
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
-    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2, refine=p["refine"],
+    rtol, refine, warnings = accuracy_request(p, inp.part is None)
+    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2, refine=refine or 1,
                     n_axes=p["grid_angles"] * p["grid_offsets"])
     scale = inp.scale
     ax = parse_axis(p["at"], p["axis"], scale)
@@ -70,24 +71,59 @@ def _pads(part, p: dict, notify) -> Report:
 
     def progress(k: int, n: int) -> None:
         if notify is not None and n > 1:
-            notify(f"mesh {k + 1} of {n} ...")
+            notify(f"level {k + 1} ..." if rtol is not None else f"mesh {k + 1} of {n} ...")
 
     start = _axis_start(p["at"], p["axis"], scale) if p["expanding"] else None
-    res = pad_grasp(inp.part, ax, pad, mesh=inp.mesh, refine=p["refine"], progress=progress,
-                    expanding_from=start, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"])
+    res = pad_grasp(inp.part, ax, pad, mesh=inp.mesh, refine=refine, rtol=rtol,
+                    max_seconds=p["max_seconds"], adaptive=not p.get("uniform", False),
+                    progress=progress, expanding_from=start, n_angles=p["grid_angles"],
+                    n_offsets=p["grid_offsets"])
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     lines = _pads_lines(res, data, pad, inp.unit, scale)
-    rep = Report("optimize", data, lines, inp.warnings + list(res.finest.warnings), p, res,
-                 _pads_writer(inp))
+    rep = Report("optimize", data, lines,
+                 inp.warnings + warnings + list(res.finest.warnings) + refinement_warnings(res),
+                 p, res, _pads_writer(inp))
     return rep
+
+
+def accuracy_request(p: dict, mesh_file: bool) -> tuple[float | None, int | None, list[str]]:
+    """``(rtol, refine, warnings)`` of a pads command: ``--rtol`` (default 0.05) or
+    ``--refine N``; a mesh file cannot be refined, so it is solved once, with a warning."""
+    from ..pads.refine import DEFAULT_RTOL
+
+    rtol, refine = p.get("rtol"), p.get("refine")
+    if rtol is not None and refine is not None:
+        raise GraspError("--refine and --rtol: give one (--refine N solves N uniform levels; "
+                         "--rtol R refines until the error estimate is within R)")
+    if p.get("uniform") and refine is not None:
+        raise GraspError("--uniform: only with --rtol (--refine N is uniform already)")
+    if mesh_file:
+        if rtol is not None:
+            raise GraspError("--rtol: needs a part file (a mesh file cannot be re-meshed); "
+                             "give the part, or drop --rtol to solve the mesh once")
+        return None, refine, ["a mesh file cannot be refined: one mesh, no error estimate "
+                              "(give a part file for an answer to --rtol)"] if refine is None else []
+    if refine is None and rtol is None:
+        rtol = DEFAULT_RTOL
+    return rtol, refine, []
+
+
+def refinement_warnings(res) -> list[str]:
+    """Warnings of a refinement that stopped before its accuracy, or that has none."""
+    out = []
+    if res.rtol is not None and not res.converged:
+        why = f" ({res.stopped})" if res.stopped else ""
+        out.append(f"not converged to --rtol {res.rtol:g}{why}: the verdict stands only if "
+                   "its error bounds decide it; raise --max-seconds or --rtol")
+    return out
 
 
 def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
     """The summary printed for people, lengths in the part's units."""
     fine, s = res.finest, 1.0 / scale
     lines = [f"model: pads, W = {pad.width * s:.4g} {unit}, rho = {pad.radius * s:.4g} {unit}; "
-             f"axis through ({fine.axis.point[0] * s:.4g}, {fine.axis.point[1] * s:.4g}) {unit} "
-             f"at {np.degrees(fine.axis.angle):.4g} deg",
+             f"axis through ({_clean(fine.axis.point[0] * s)}, {_clean(fine.axis.point[1] * s)}) "
+             f"{unit} at {_clean(np.degrees(fine.axis.angle))} deg",
              f"sigma0 = {fine.sigma0 * s:.6g} {unit}  sigma_L = {fine.sigma_L * s:.6g} {unit}  "
              f"(critical distance {fine.limit.critical_distance * s:.3g} {unit})"]
     if fine.sigma_star is None:
@@ -99,18 +135,35 @@ def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
                      f"U_A = {ua}  U_L = {fine.U_L:.6g} J  (noise floor {fine.noise:.3g} J)")
         lines.append(f"grip force at sigma* = {fine.force:.4g} N  "
                      f"(stiffness {fine.stiffness:.4g} N/m)")
-    if "convergence" in data:
-        lines.append(f"{'max_area (' + unit + '^2)':>18} {'nodes':>7} "
-                     f"{'sigma* (' + unit + ')':>14} {'Q* (J)':>12}")
+    if len(data["convergence"]) > 1:
+        lines.append(f"{'level':>5} {'nodes':>7} {'grid x':>6} {'sigma* (' + unit + ')':>14} "
+                     f"{'Q* (J)':>12} {'U_A (J)':>12}")
         for row in data["convergence"]:
             ss = "-" if row["sigma_star"] is None else f"{row['sigma_star'] * s:.6g}"
-            lines.append(f"{row['max_area'] * s * s:>18.4g} {row['nodes']:>7} {ss:>14} "
-                         f"{row['quality']:>12.5g}")
+            ua = "infinite" if row["U_A_infinite"] else f"{row['U_A']:.5g}"
+            lines.append(f"{row['level']:>5} {row['nodes']:>7} {row['grid']['refinement']:>6} "
+                         f"{ss:>14} {row['quality']:>12.5g} {ua:>12}")
         e = data["error_estimate"]
         es = "-" if e["sigma_star"] is None else f"{e['sigma_star'] * s:.3g} {unit}"
-        lines.append(f"error estimate (Richardson): Q* ± {e['quality']:.3g} J, sigma* ± {es}")
+        how = data["refinement"]
+        target = f", target rtol {res.rtol:g}" if res.rtol is not None else ""
+        lines.append(f"error estimate ({how} refinement, mesh and landscape{target}): "
+                     f"Q* ± {e['quality']:.3g} J, U_A ± {_fmt(e['U_A'])} J, sigma* ± {es}; "
+                     f"converged: {'yes' if data['converged'] else 'no'}")
     lines.append(f"verdict: {data['verdict'].upper()}")
     return lines
+
+
+def _fmt(x) -> str:
+    return "-" if x is None else f"{x:.3g}"
+
+
+def _clean(x: float) -> str:
+    """A coordinate for people: 4 significant digits, no floating-point dust (-0, 1e-16)."""
+    v = float(x)
+    if abs(v) < 1e-9:
+        v = 0.0
+    return f"{v:.4g}"
 
 
 def _pads_writer(inp):
@@ -183,6 +236,10 @@ def _paper(part, p: dict) -> Report:
 
     if (p["jaws"] is None) == (p["at"] is None):
         raise GraspError("jaws: give exactly one of --jaws A B (node ids) or --at X,Y X,Y (positions)")
+    for flag, key in (("--rtol", "rtol"), ("--refine", "refine"), ("--max-seconds", "max_seconds")):
+        if p.get(key) is not None:
+            raise GraspError(f"{flag}: the paper model (SPEC §4) is exact on its mesh and is "
+                             "not refined; drop it, or use the pads model (SPEC §6)")
     check_eps(p["eps"])
     check_jaw_width(p["jaw_width"])
     inp, jaws = _paper_inputs(part, p)

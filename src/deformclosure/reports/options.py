@@ -109,6 +109,16 @@ _MATERIAL = Opt("material", ("--material",), "str", role="file_or_json", metavar
 _MAX_AREA = Opt("max_area", ("--max-area",), "float",
                 help="Largest triangle area of the starting mesh, in the part's units² "
                      "(overrides the part's mesh.max_area; part files and drawings only).")
+_ACCURACY = (
+    Opt("rtol", ("--rtol",), "float",
+        help="pads: relative accuracy of Q* and U_A to refine to (default 0.05; mesh and "
+             "landscape, adaptively)."),
+    Opt("max_seconds", ("--max-seconds",), "float",
+        help="pads: time budget of the refinement in seconds (default 120); when it runs "
+             "out the report says converged: false."),
+    Opt("uniform", ("--uniform",), "flag", False,
+        help="pads: with --rtol, refine the mesh everywhere instead of adaptively."),
+)
 _UNITS = Opt("units", ("--units",), "str",
              help="Unit of the lengths given here and of a meshio file's coordinates (m, cm, "
                   "mm, in; default: the part file's units, m for mesh files).")
@@ -159,8 +169,10 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("axis", ("--axis",), "str", metavar="X,Y,DEG",
             help="pads: the closing axis through (X, Y) at DEG degrees."),
         *_pads(48, 50),
-        Opt("refine", ("--refine",), "int", 1, show_default=True,
-            help="pads: solve on N meshes (h halving); report error estimates and a verdict."),
+        Opt("refine", ("--refine",), "int",
+            help="pads: solve N uniform levels (h halving, the landscape refined at the "
+                 "saddle) instead of refining to --rtol; 1 = one mesh, no error estimate."),
+        *_ACCURACY,
         Opt("method", ("--method",), "choice", "exact", choices=METHODS, show_default=True,
             help="paper model: exact: ours; paper: every crossing; approx: ε-grid."),
         Opt("eps", ("--eps",), "float",
@@ -229,6 +241,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="pads: verify the best N screened candidates with optimize's code path on "
                  "the plan's mesh and one with h doubled (error estimate); only a verified "
                  "row can be 'held'."),
+        *_ACCURACY[:2],
         Opt("eps", ("--eps",), "float",
             help="paper: every pair's quality within eps of its optimum, in joules."),
         Opt("allow_pulling", ("--allow-pulling",), "flag", False,

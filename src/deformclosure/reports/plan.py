@@ -20,6 +20,9 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         raise GraspError(f"--top = {p['top']}: must be >= 0")
     if p["verify"] < 0:
         raise GraspError(f"--verify = {p['verify']}: must be >= 0 (0: screen only)")
+    from ..pads.refine import check_accuracy
+
+    check_accuracy(p["rtol"], p["max_seconds"])
     if p["model"] == "pads":
         only_for("paper", [("--eps", p["eps"] is not None), ("--expanding", p["expanding"]),
                            ("--jaw-width", p["jaw_width"] != 0.0),
@@ -28,7 +31,8 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
                            ("--region", bool(p["region"])),
                            ("--allow-pulling", p["allow_pulling"])], "add --model paper")
         return _pads(part, p, progress)
-    only_for("pads", [("--verify", p["verify"] != 5)], "drop --model paper")
+    only_for("pads", [("--verify", p["verify"] != 5), ("--rtol", p["rtol"] is not None),
+                      ("--max-seconds", p["max_seconds"] is not None)], "drop --model paper")
     return _paper(part, p, progress)
 
 
@@ -48,7 +52,8 @@ def _pads(part, p: dict, progress) -> Report:
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
-                    top=p["verify"], twin=twin, progress=progress, part=inp.part)
+                    top=p["verify"], twin=twin, progress=progress, part=inp.part,
+                    rtol=p["rtol"], max_seconds=p["max_seconds"])
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)
