@@ -294,7 +294,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         limit=limit, curve=curve, escape_path=path, n_axes=land.n_evaluated, grid=grid,
         start_curve=start_curve, n_nodes=mesh.n_nodes, e_L=e_L,
         strain_at_sigma_star=strain, blind=mesh_is_blind(mesh, pad, hole),
-        warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain), solver=solver,
+        warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain)
+        + _contact_size_warnings(mesh, contacts, pad, limit.critical_distance), solver=solver,
         saddle=saddle)
 
 
@@ -393,6 +394,28 @@ def mesh_is_blind(mesh, pad: Pad, hole: int | None = None) -> bool:
     then meet one node or none, energies follow the nodes, and a barrier read off such a
     mesh is no evidence of holding (its verdict is "undecided" at best)."""
     return boundary_spacing(mesh, hole) > pad.reach
+
+
+def contact_element_size(mesh, points: np.ndarray, radius: float) -> float:
+    """Size ``h`` (m) of the largest element within ``radius`` (m) of ``points`` (m): the
+    side of the equilateral triangle of its area."""
+    c = mesh.nodes[mesh.triangles].mean(axis=1)
+    d = np.min(np.linalg.norm(c[:, None, :] - np.asarray(points)[None], axis=2), axis=1)
+    near = d <= radius
+    area = float(mesh.areas[near].max()) if near.any() else float(mesh.areas.max())
+    return math.sqrt(4.0 * area / math.sqrt(3.0))
+
+
+def _contact_size_warnings(mesh, contacts: np.ndarray, pad: Pad, ell: float
+                           ) -> tuple[str, ...]:
+    """A warning when elements at the pads' contacts are larger than ``ℓ/2`` (SPEC §6:
+    the first level of a refinement is never that coarse)."""
+    h = contact_element_size(mesh, contacts, pad.half_span + 0.5 * ell)
+    if h > 0.5 * ell * (1 + 1e-6):
+        return (f"elements at the pads' contacts are {h:.3g} m, more than half the critical "
+                f"distance ({0.5 * ell:.3g} m): this mesh does not resolve the answer; refine "
+                "to an accuracy (--rtol, the default) rather than one mesh",)
+    return ()
 
 
 def _resolution_warnings(mesh, pad: Pad, hole: int | None) -> tuple[str, ...]:

@@ -55,15 +55,121 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
     check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")
-    res = deform_closure(inp.mesh, fingers)
-    rel = release_energy_fingers(inp.mesh, fingers, part=inp.part, start=res.equilibrium,
-                                 rigid_closed=res.deform_closure, n_translation=p["grid_steps"],
-                                 levels=p["saddle_levels"],
-                                 count=None if progress is None else lambda n: progress(n, None))
+
+    def solve(mesh):
+        res = deform_closure(mesh, fingers)
+        rel = release_energy_fingers(mesh, fingers, part=inp.part, start=res.equilibrium,
+                                     rigid_closed=res.deform_closure,
+                                     n_translation=p["grid_steps"], levels=p["saddle_levels"],
+                                     count=None if progress is None else lambda n: progress(n, None))
+        return res, rel
+
+    rtol = p.get("rtol")
+    if rtol is not None and inp.part is None:
+        raise DeformClosureError("--rtol: needs a part file (a mesh file cannot be re-meshed); "
+                                 "give the part, or drop --rtol to solve the mesh once")
+    levels = (_refined(inp, fingers, solve, rtol, p.get("max_seconds"), notify)
+              if rtol is not None else [(inp.mesh, *solve(inp.mesh))])
+    mesh, res, rel = levels[-1]
+    inp.mesh = mesh
     data = {**merge_release(res.to_dict(), res, rel), "provenance": provenance(inp.sources)}
-    lines, warnings = _lines(inp.mesh, fingers, res, rel)
+    lines, warnings = _lines(mesh, fingers, res, rel)
+    if rtol is not None:
+        more_lines, more = _refinement_lines(data, levels, rtol, p.get("max_seconds"))
+        lines += more_lines
+        warnings += more
     return Report("check", data, lines, inp.warnings + warnings, p, (res, rel, fingers, inp),
                   _writer)
+
+
+def _refined(inp, fingers, solve, rtol: float, max_seconds: float | None, notify) -> list:
+    """``(mesh, closure, release)`` on meshes with ``h`` halved per level until the release
+    energy's estimate — the change between the last levels (:func:`~deformclosure.pads.
+    refine.level_error`) plus the placements lattice's own — is within ``rtol`` of it, or the
+    budget (``max_seconds``, the memory limits) ends it (SPEC §6 "Accuracy by default")."""
+    import time
+
+    from ..mesh import mesh_part
+    from ..mesh.generate import default_max_area
+    from ..pads.refine import DEFAULT_MAX_SECONDS, MAX_LEVELS, check_accuracy
+    from ..pads.size_limits import check_pads_size
+
+    check_accuracy(rtol, max_seconds)
+    budget = DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds)
+    base = default_max_area(inp.part)
+    pts = contact_points(inp.part, fingers)
+    t_start, levels, seconds = time.perf_counter(), [], []
+    for k in range(MAX_LEVELS):
+        t0 = time.perf_counter()
+        if k == 0:
+            mesh = inp.mesh
+        else:
+            if notify is not None:
+                notify(f"level {k + 1} ...")
+            try:
+                mesh = mesh_part(inp.part, max_area=base / 4.0**k, points=pts)
+                check_pads_size(mesh, solvers=3, what="check")
+            except DeformClosureError as err:
+                levels[-1] += (f"memory or size limit at level {k + 1}: {err}",)
+                return levels
+        levels.append((mesh, *solve(mesh)))
+        seconds.append(time.perf_counter() - t0)
+        if len(levels) > 1 and _check_error(levels)[0] <= rtol * abs(levels[-1][2].U_A):
+            return levels
+        growth = seconds[-1] / seconds[-2] if len(seconds) > 1 and seconds[-2] > 0 else 4.0
+        predicted = seconds[-1] * min(max(growth, 1.5), 16.0)
+        if time.perf_counter() - t_start + predicted > budget:
+            levels[-1] += (f"time budget: level {k + 2} would take about {predicted:.0f} s, "
+                           f"beyond --max-seconds {budget:g}",)
+            return levels
+    levels[-1] += (f"{MAX_LEVELS} levels solved",)
+    return levels
+
+
+def _check_error(levels) -> tuple[float, float]:
+    """Error estimates (J) of U_A and of the quality on the last level: the change between
+    levels (mesh) plus the lattice's own estimate of U_A (placements)."""
+    import math
+
+    from ..pads.refine import level_error
+
+    UA = [lv[2].U_A for lv in levels]
+    Q = [lv[2].quality for lv in levels]
+    lattice = float(levels[-1][2].U_A_error)
+    e_ua, e_q = level_error(UA), level_error(Q)
+    if e_ua is None:
+        return math.nan, math.nan
+    return e_ua + lattice, e_q + lattice
+
+
+def _refinement_lines(data: dict, levels, rtol: float, max_seconds) -> tuple[list[str], list[str]]:
+    """Add ``convergence``, ``error_estimate`` and ``converged`` to ``data``; the lines and
+    warnings they print."""
+    import math
+
+    e_ua, e_q = _check_error(levels) if len(levels) > 1 else (math.nan, math.nan)
+    fine = levels[-1][2]
+    converged = len(levels) > 1 and e_ua <= rtol * abs(fine.U_A)
+    num = lambda v: None if not math.isfinite(v) else float(v)  # noqa: E731
+    data["convergence"] = [{"level": k, "nodes": lv[0].n_nodes, "U_A": num(lv[2].U_A),
+                            "U_A_infinite": math.isinf(lv[2].U_A), "U_A_error": num(lv[2].U_A_error),
+                            "quality": num(lv[2].quality), "deform_closure": lv[2].deform_closure}
+                           for k, lv in enumerate(levels)]
+    data["error_estimate"] = {"U_A": num(e_ua), "quality": num(e_q)}
+    data["converged"] = bool(converged)
+    data["rtol"] = rtol
+    lines = [f"{'level':>5} {'nodes':>7} {'U_A (J)':>12} {'± lattice (J)':>14}"]
+    for row in data["convergence"]:
+        ua = "infinite" if row["U_A_infinite"] else f"{row['U_A']:.5g}"
+        le = "-" if row["U_A_error"] is None else f"{row['U_A_error']:.3g}"
+        lines.append(f"{row['level']:>5} {row['nodes']:>7} {ua:>12} {le:>14}")
+    lines.append(f"error estimate (mesh levels plus lattice, target rtol {rtol:g}): U_A ± "
+                 f"{e_ua:.3g} J; converged: {'yes' if converged else 'no'}")
+    warnings = []
+    if not converged:
+        why = levels[-1][3] if len(levels[-1]) > 3 else "no estimate"
+        warnings.append(f"not converged to --rtol {rtol:g} ({why}): raise --max-seconds or --rtol")
+    return lines, warnings
 
 
 def merge_release(report: dict, closure, release) -> dict:

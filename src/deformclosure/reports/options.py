@@ -207,6 +207,10 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("export_fields", _FIELDS, "file", role="output",
             help="Write the fields at the equilibrium to FILE.vtu for ParaView: deformed "
                  "mesh, displacement, strain, contact pressure."),
+        Opt("rtol", ("--rtol",), "float",
+            help="Refine the mesh (h halved per level) until U_A's error estimate (mesh "
+                 "levels plus lattice) is within this fraction of it; default: one mesh."),
+        _ACCURACY[1],
         _MATERIAL, _UNITS, _MAX_AREA,
         *_DISPLAY,
     ),
