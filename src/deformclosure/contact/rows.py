@@ -58,10 +58,11 @@ design in three choices, the fields of :class:`RowRule`:
     the disc: a centre outside the part gives ``DISC_EDGE`` rows on edges whose foot point
     it faces from outside and whose end nodes are outside the disc; a centre inside the
     part presses on its nearest edge like a corner with offset ``r`` (``CENTRE_EDGE``) or
-    its nearest vertex (``CORNER_NODE``). Once a node is inside, the node rows alone see
-    the disc (a round pad pressed past its centre).
+    its nearest vertex (``CORNER_NODE``), by the ``"least_deep"`` rule below whatever
+    ``inside_corner`` says. Once a node is inside, the node rows alone see the disc (a
+    round pad pressed past its centre).
 ``inside_corner``
-    ``"nearest"`` (§3): a corner inside the part gives a ``CORNER_EDGE`` row on every edge
+    For point fingers and polygon corners. ``"nearest"`` (§3): a corner inside the part gives a ``CORNER_EDGE`` row on every edge
     whose line is within round-off (``1e-9 ℓ``) of the corner's distance to the boundary,
     and also the rows of the outside rule on edges whose line it is outside of.
     ``"least_deep"`` (§7): only one row — among the edges within twice that distance
@@ -296,10 +297,10 @@ class Reach:
     Attributes
     ----------
     penetration : ndarray (n_fingers,)
-        Deepest penetration of any of the finger's candidate rows — a node inside its body,
-        a corner (or disc centre, plus ``r``) inside the part at its distance from the
-        boundary, an edge cutting a disc between its nodes — 0 when none penetrates. The
-        search radius of the placement kernel is a multiple of the largest.
+        Deepest penetration of the finger's candidates — a node inside its body, a corner
+        inside the part at its distance from the boundary (under the pad rule also a disc's
+        centre, plus ``r``), an edge cutting a disc between its nodes — 0 when none
+        penetrates. The search radius of the placement kernel is a multiple of the largest.
     depth : ndarray (n_fingers,)
         The finger's depth for the admissibility limit: nodes inside its body and its
         corners inside the part (discs only with :attr:`RowRule.disc_depth`).
@@ -446,51 +447,53 @@ class _RowBuilder:
     def rows(self, radius: float) -> ContactRows:
         parts: list[ContactRows] = []
         for fi, f in enumerate(self.fingers):
-            parts += self._finger(fi, f, radius)[0]
+            parts += self._finger(fi, f, radius, False)[0]
         return ContactRows.concat(parts)
 
     def reach(self) -> Reach:
-        out = np.array([self._finger(fi, f, -np.inf)[1:] for fi, f in enumerate(self.fingers)]).reshape(-1, 2)
+        out = np.array([self._finger(fi, f, -np.inf, True)[1:] for fi, f in enumerate(self.fingers)]).reshape(-1, 2)
         return Reach(np.maximum(out[:, 0], 0.0), np.maximum(out[:, 1], 0.0))
 
-    def _finger(self, fi: int, f: Finger, radius: float) -> tuple[list[ContactRows], float, float]:
-        """Rows of finger ``fi`` with a gap below ``radius``, its penetration and depth."""
+    def _finger(self, fi: int, f: Finger, radius: float, reach: bool) -> tuple[list[ContactRows], float, float]:
+        """Rows of finger ``fi`` with a gap below ``radius``; with ``reach`` also its
+        penetration and depth (else ``-inf``)."""
         geo, rule = self.geo, self.rule
         rc = f.round_centre()
         pad = rc is not None and rule.disc == "pad"
-        counts = rule.disc_depth or rc is None
+        counts = rule.disc_depth or rc is None      # the finger's depth counts
         out: list[ContactRows] = []
         pen = depth = -np.inf
         anyin = False
+        sd = np.zeros(0)
         if f.has_interior:
-            sd, dirn = (_pad_gaps(geo, f, rc, self.axes[fi]) if pad else
-                        (f.signed_distance(geo.xn), None))
+            sd, dirn = _pad_gaps(geo, f, rc, self.axes[fi]) if pad else (f.signed_distance(geo.xn), None)
             anyin = bool(np.any(sd < 0))
             pen = float(np.max(-sd, initial=-np.inf))
-            if counts:
-                depth = pen
+            depth = pen if counts else depth
             out += _body_rows(geo, fi, f, sd, dirn, radius)
-        corners = [(c, 0.0, k) for k, c in enumerate(np.asarray(f.vertices, float))]
-        if pad:
-            corners.append((np.asarray(rc[0], float), float(rc[1]), 0))
-        if len(corners) and rule.inside_corner == "nearest" and not pad:
-            out += _corner_rows_nearest(geo, fi, f, radius, rule.cone)
-            inside = geo.bd.inside(geo.x, np.array([c for c, _, _ in corners]))
-            for (w, off, _), ins in zip(corners, inside):
-                if ins:
-                    d = float(segment_distance(geo.a, geo.b, w).min(initial=np.inf)) + off
-                    pen = max(pen, d)
-                    depth = max(depth, d) if counts else depth
-        elif len(corners):
+        if pad or rule.inside_corner == "least_deep":
+            corners = [(c, 0.0, k) for k, c in enumerate(np.asarray(f.vertices, float))]
+            if pad:                  # the centre presses like a corner with offset r
+                corners.append((np.asarray(rc[0], float), float(rc[1]), 0))
             for w, off, k in corners:
                 rows, p, d = _corner_least_deep(geo, fi, f, k, w, off, radius, rule.cone, centre=off > 0,
-                                                anyin=anyin, node_sd=sd if pad else None)
+                                                anyin=anyin, node_sd=sd)
                 out += rows
                 pen = max(pen, p)
-                if counts:
-                    depth = max(depth, d)
+                depth = max(depth, d) if counts else depth
+        elif len(f.vertices):
+            out += _corner_rows_nearest(geo, fi, f, radius, rule.cone)
+            if reach:
+                corners = np.asarray(f.vertices, float)
+                for w, ins in zip(corners, geo.bd.inside(geo.x, corners)):
+                    if ins:
+                        d = float(segment_distance(geo.a, geo.b, w).min(initial=np.inf))
+                        pen = max(pen, d)
+                        depth = max(depth, d) if counts else depth
         if rc is not None and not pad:
-            out += _round_rows(geo, fi, f, radius)
+            rows, p = _round_rows(geo, fi, f, radius)
+            out += rows
+            pen = max(pen, p)
         return out, pen, depth
 
 
@@ -688,9 +691,9 @@ def _least_deep_edge(geo: _EdgeGeometry, f: Finger, s: np.ndarray, gl: np.ndarra
     return best
 
 
-def _round_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> list[ContactRows]:
+def _round_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> tuple[list[ContactRows], float]:
     """A circular finger boundary against boundary edges whose foot point it faces
-    (``disc = "radial"``)."""
+    (``disc = "radial"``); also the deepest cut of such an edge into the disc."""
     c, r = f.round_centre()
     a, ab = geo.a, geo.ab
     rel = c - a
@@ -700,13 +703,14 @@ def _round_rows(geo: _EdgeGeometry, fi: int, f: Finger, radius: float) -> list[C
     gl = -np.einsum("ej,ej->e", rel, geo.n_in)
     gap = gl - r
     inner = (s > 0) & (s < 1) if geo.x_ref is None else (s_ref > 0) & (s_ref < 1)
-    ok = inner & (gl >= 0) & (np.abs(gap) < radius)
-    ee = np.flatnonzero(ok)
+    faces = inner & (gl >= 0)
+    pen = float(np.max(-gap[faces], initial=-np.inf))
+    ee = np.flatnonzero(faces & (np.abs(gap) < radius))
     if not len(ee):
-        return []
+        return [], pen
     ss = s_w[ee]
     return [_rows(fi, DISC_EDGE, -1, ee, geo.edges[ee], np.c_[1 - ss, ss], geo.n_dir[ee], gap[ee],
-                  a[ee] + ss[:, None] * ab[ee])]
+                  a[ee] + ss[:, None] * ab[ee])], pen
 
 
 def refresh_rows(rows: ContactRows, bd: BoundaryModel, x: np.ndarray, fingers: Sequence[Finger]) -> ContactRows:
