@@ -369,6 +369,25 @@ def contact_rows(
     The rule per body kind is in the module notes. A corner on the inner side of an edge
     line only counts as penetrating that edge when it is inside the part and that edge is
     (one of) the nearest, so thin walls are safe.
+
+    Examples
+    --------
+    A 10 mm square with a node at (5, 0) mm; a point finger 1 mm below its bottom edge, and
+    a disc pressed 0.1 mm into it at that node, pressing like a round pad along +y:
+
+    >>> from deformclosure import Part, mesh_part
+    >>> from deformclosure.contact.bodies import DiscFinger, PointFinger
+    >>> square = mesh_part(Part.from_dict({"units": "mm", "outer": [[0, 0], [10, 0], [10, 10], [0, 10]],
+    ...     "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "elastic_limit_strain": 0.5},
+    ...     "mesh": {"points": [[5, 0]]}}))
+    >>> bd = BoundaryModel(square)
+    >>> rows = contact_rows(bd, square.nodes, [PointFinger((0.004, -0.001))], radius=0.002)
+    >>> ROW_KINDS[int(rows.kind[0])], float(rows.gap[0]), rows.direction[0] + 0.0
+    ('corner_edge', 0.001, array([0., 1.]))
+    >>> disc = DiscFinger((0.005, -0.0009), 0.001)
+    >>> rows = contact_rows(bd, square.nodes, [disc], radius=0.0, rule=PLACEMENT_RULE, axes=[[0.0, 1.0]])
+    >>> ROW_KINDS[int(rows.kind[0])], round(float(rows.gap[0]), 12), square.nodes[rows.element[0]].tolist()
+    ('node_body', -0.0001, [0.005, 0.0])
     """
     return _RowBuilder(bd, x, fingers, rule, axes, x_ref, normals_ref, feet_ref).rows(float(radius))
 
@@ -497,13 +516,12 @@ class _RowBuilder:
         return out, pen, depth
 
 
-def _pad_gaps(geo: _EdgeGeometry, f: Finger, rc: tuple[np.ndarray, float], axis: np.ndarray,
-              points: np.ndarray | None = None, inward: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _pad_gaps(geo: _EdgeGeometry, f: Finger, rc: tuple[np.ndarray, float], axis: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
     """Gap and direction of boundary nodes against a disc that presses like a round pad
     along ``axis`` (module notes, ``disc = "pad"``): ``(B,)`` gaps (``inf`` beyond the
     reach) and ``(B, 2)`` unit directions."""
-    P = geo.xn if points is None else points
-    n = geo.node_inward if inward is None else inward
+    P, n = geo.xn, geo.node_inward
     c, r = np.asarray(rc[0], float), float(rc[1])
     shape = Capsule(0.0, r)
     a = np.asarray(axis, float)
