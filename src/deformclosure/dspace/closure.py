@@ -72,8 +72,8 @@ import numpy as np
 from ..errors import DeformClosureError
 from .equilibrium import EquilibriumResult, area_centroid, equilibrium
 from .fingers import Finger, as_fingers
-from .obstacles import (CORNER_NODE, FEATURE_NAMES, NODE_BODY, REFLEX, STRAIGHT, BoundaryModel,
-                        contact_rows, resolve_tolerance)
+from ..contact.rows import CORNER_NODE, FEATURE_NAMES, NODE_BODY, REFLEX, STRAIGHT, BoundaryModel, contact_rows
+from .obstacles import resolve_tolerance
 
 __all__ = [
     "ContactPrimitive",
@@ -270,7 +270,7 @@ def contact_groups(mesh: Any, q: Any, fingers: Sequence[Finger], tol: float | No
 
 class _Boundary:
     """Boundary nodes and edges of configuration ``x`` (ends, vectors, lengths, inward
-    normals) with the rest-geometry features of :class:`.obstacles.BoundaryModel`."""
+    normals) with the rest-geometry features of :class:`deformclosure.contact.rows.BoundaryModel`."""
 
     def __init__(self, bd: BoundaryModel, x: np.ndarray):
         self.bd, self.x = bd, x

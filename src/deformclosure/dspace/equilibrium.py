@@ -13,8 +13,9 @@ Model (small-displacement theory, like the paper's ``K``)
   rotation ω = ½ curl u, the gauge of SPEC §6/§7) as an exact
   finite rotation + translation and the rest as deformation, so a turning part does
   not swell (a linearised rotation would stretch it).
-* Contact conditions are node-to-surface (:func:`.obstacles.contact_rows`): part nodes
-  against finger bodies, finger corners against part edges, discs against edges. Their
+* Contact conditions are node-to-surface (:func:`deformclosure.contact.rows.contact_rows`,
+  its §3 rule): part nodes against finger bodies, finger corners against part edges,
+  discs against edges. Their
   force directions (finger normals at the rigidly placed nodes, part-edge normals at
   rest), the material points carrying them on edges (foot points at rest) and the
   moment arms are taken on the rest geometry placed by the part's rigid motion, so the
@@ -65,8 +66,8 @@ from ..errors import DeformClosureError
 from ..elasticity.strain import strain_magnitude
 from .fingers import Finger, as_fingers
 from .placement import check_finger_placement
-from .obstacles import (BoundaryModel, ContactRows, contact_rows, merge_rows, nonnegative, refresh_rows,
-                        resolve_tolerance)
+from ..contact.rows import BoundaryModel, ContactRows, contact_rows, merge_rows, refresh_rows
+from .obstacles import nonnegative, resolve_tolerance
 
 __all__ = ["EquilibriumResult", "equilibrium", "area_centroid"]
 
