@@ -38,11 +38,14 @@ def test_every_command_has_max_area(command):
 
 
 def test_optimize_report_uses_it():
-    a = reports.run("optimize", RECT, {"at": ("0,10", "12,10"), "pad_radius": 1.0,
-                                       "max_area": 2.0, "grid_angles": 8, "grid_offsets": 8})
-    b = reports.run("optimize", RECT, {"at": ("0,10", "12,10"), "pad_radius": 1.0,
-                                       "max_area": 0.5, "grid_angles": 8, "grid_offsets": 8})
+    one = {"at": ("0,10", "12,10"), "pad_radius": 1.0, "grid_angles": 8, "grid_offsets": 8,
+           "refine": 1}
+    a = reports.run("optimize", RECT, {**one, "max_area": 2.0})
+    b = reports.run("optimize", RECT, {**one, "max_area": 0.5})
     assert b.data["nodes"] > 2 * a.data["nodes"]
+    # an adaptive run starts there too: its first level is no coarser than the option
+    c = reports.run("optimize", RECT, {**one, "refine": None, "rtol": 0.2, "max_area": 0.5})
+    assert c.data["convergence"][0]["max_area"] <= 0.5e-6 * (1 + 1e-9)
 
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf")])

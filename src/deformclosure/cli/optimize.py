@@ -12,7 +12,7 @@ __all__ = ["command"]
 EPILOG = """\b
 Examples (pads, the default model, SPEC §6):
   deformclosure optimize examples/notched_bar.json --at 15,0 15,12 --pad-radius 2 -o report.json --plot out/
-  deformclosure optimize examples/rectangle.json --axis 6,10,0 --pad-radius 1 --pad-width 4 --refine 3
+  deformclosure optimize examples/rectangle.json --axis 6,10,0 --pad-radius 1 --pad-width 4 --rtol 0.02
 \b
 Paper model (point jaws at mesh nodes, SPEC §4, for reproduction):
   deformclosure optimize examples/rectangle.json --model paper --at 0,10 12,10 -o report.json
