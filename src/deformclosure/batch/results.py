@@ -52,12 +52,12 @@ def read_results(db_path: str | os.PathLike, status: str | None = None) -> list[
 
 
 #: Scalar fields of the reports shown by ``results`` (SI units, SPEC §5).
-_SCALARS = ("model", "verdict", "sigma_star", "quality", "U_A", "U_L", "sigma_L",
+_SCALARS = ("model", "verdict", "converged", "sigma_star", "quality", "U_A", "U_L", "sigma_L",
             "force", "stiffness", "deform_closure", "order", "energy")
-_FIELDS = (*_SCALARS, "n_pairs", "top_a", "top_b", "n_axes", "top_angle", "top_point",
+_FIELDS = (*_SCALARS, "quality_error", "n_pairs", "top_a", "top_b", "n_axes", "top_angle", "top_point",
            "top_sigma_star", "top_quality", "top_verdict", "n_nodes", "n_triangles")
 _TEXT = frozenset({"model", "verdict", "top_verdict"})
-_BOOL = frozenset({"deform_closure"})
+_BOOL = frozenset({"deform_closure", "converged"})
 _INT = frozenset({"order"})
 
 
@@ -115,6 +115,9 @@ def result_summary(result: dict | None) -> dict:
         return {}
     out = {k: _typed(k, result[k]) for k in _SCALARS
            if k in result and not isinstance(result[k], (dict, list))}
+    err = result.get("error_estimate")
+    if isinstance(err, dict) and "quality" in err:     # refined to --rtol (SPEC §6)
+        out["quality_error"] = _typed("quality", err["quality"])
     axes = result.get("axes")
     if isinstance(axes, list):                   # a pad plan: grasp axes, verified first
         out["n_axes"] = len(axes)
@@ -147,12 +150,12 @@ def result_summary(result: dict | None) -> dict:
 
 #: Units of the summary fields, as suffixes of the CSV columns.
 _UNITS = {"sigma_star": "m", "quality": "J", "U_A": "J", "U_L": "J", "sigma_L": "m",
-          "force": "N", "stiffness": "N_per_m",
+          "force": "N", "stiffness": "N_per_m", "quality_error": "J",
           "energy": "J", "top_sigma_star": "m", "top_quality": "J", "top_angle": "rad"}
 #: Columns of ``results --format csv`` after the row's own columns, in this order (those
 #: present in some row). Lengths in m, energies in J, angles in rad.
 CSV_FIGURES = (
-    "model", "verdict", "sigma_star_m", "quality_J", "U_A_J", "U_A_infinite", "U_L_J",
+    "model", "verdict", "converged", "sigma_star_m", "quality_J", "quality_error_J", "U_A_J", "U_A_infinite", "U_L_J",
     "sigma_L_m", "force_N", "stiffness_N_per_m", "jaw_a", "jaw_b", "jaw_a_x_m", "jaw_a_y_m",
     "jaw_b_x_m", "jaw_b_y_m",
     "axis_x_m", "axis_y_m", "axis_angle_rad", "deform_closure", "order", "energy_J",
