@@ -47,8 +47,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     from ..dspace.fingers import load_fingers
     from ..pads.size_limits import check_pads_size
 
+    from ..pads.refine import check_accuracy
+
     p = params
     _check_params(p)
+    check_accuracy(p.get("rtol"), p.get("max_seconds"))
     fsrc = source_of(p["fingers"], "finger file")
     fingers = load_fingers(fsrc)
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
@@ -91,10 +94,9 @@ def _refined(inp, fingers, solve, rtol: float, max_seconds: float | None, notify
 
     from ..mesh import mesh_part
     from ..mesh.generate import default_max_area
-    from ..pads.refine import DEFAULT_MAX_SECONDS, MAX_LEVELS, check_accuracy
+    from ..pads.refine import DEFAULT_MAX_SECONDS, MAX_LEVELS
     from ..pads.size_limits import check_pads_size
 
-    check_accuracy(rtol, max_seconds)
     budget = DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds)
     base = default_max_area(inp.part)
     pts = contact_points(inp.part, fingers)
