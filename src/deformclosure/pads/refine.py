@@ -326,15 +326,29 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int | None 
 
 
 def _solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
-                 expanding_from, options: dict) -> PadGraspResult:
+                 expanding_from, options: dict, most: int = 4) -> PadGraspResult:
     """Level ``k``: the grasp on ``mesh`` (twin ``twin_m``), its landscape refined ``2^k``
-    times around ``saddles`` (the earlier levels' saddles, to which this one's is added)."""
+    times around ``saddles`` (the earlier levels' saddles, to which this one's is added).
+
+    Refining around a saddle can raise its pass (a coarse grid may cut a ridge between
+    its vertices) so that the escape goes over another, still coarse pass; the level is
+    solved again with that saddle refined too, until the escape's saddle lies in a
+    refined patch (at most ``most`` solves)."""
     tw = PadContact(twin_m) if twin_m is not None else None
     holes = {} if expanding_from is None else _holes(mesh, tw, expanding_from)
-    refined = (2**k, list(saddles)) if k > 0 and saddles else None
-    res = optimize_pads(mesh, axis, pad, twin=tw, saddles=refined, **holes, **options)
-    if res.saddle is not None:
-        saddles.append(res.saddle)
+    solver = None
+    for _ in range(most):
+        refined = (2**k, list(saddles)) if k > 0 and saddles else None
+        res = optimize_pads(mesh, axis, pad, solver=solver, twin=tw, saddles=refined,
+                            **holes, **options)
+        solver = res.solver
+        if res.saddle is None:
+            return res
+        inside = k > 0 and getattr(res.grid, "contains", lambda ax: False)(res.saddle)
+        if not inside:
+            saddles.append(res.saddle)
+        if k == 0 or inside:
+            return res
     return res
 
 

@@ -133,6 +133,15 @@ class SaddleRefinedGrid:
         """The grasp axis of vertex ``v``."""
         return self.fine.axis(v)
 
+    def contains(self, ax: GraspAxis) -> bool:
+        """Whether axis ``ax`` is a fine vertex inside a patch (not on its boundary): a
+        saddle there is resolved at this grid's finest spacing."""
+        i, j = self._nearest_cell(self.fine, ax)
+        v = self._cell_vertex(i, j)
+        if v is None or v not in self.patch:
+            return False
+        return all(w in self.patch for w in self.fine.neighbours(v))
+
     def is_coarse(self, v: int) -> bool:
         i, j = self.fine.cell(v)
         return i % self.factor == 0 and j % self.factor == 0
