@@ -8,10 +8,10 @@ equilibrium test, over a *vertex oracle* — a :func:`vertex_oracle` class — t
 each vertex's energy lazily, on the search's demand. An oracle describes a *cell* of the
 landscape: the energies of the point where the search runs (:func:`cell_energy`), a lower
 bound of each vertex's energy over the cell (:func:`cell_floor`), and whether an
-equilibrium at that point stays one over the whole cell (:func:`cell_kept`). A point cell
-(``floor = energy``, every equilibrium kept) is the plain escape search:
+equilibrium at that point stays one over the whole cell (:func:`cell_kept`). Its callers:
 
-* :func:`bottleneck_escape` — an energy vector ``U`` (:class:`VertexEnergies`), the
+* :func:`bottleneck_escape` — a point cell (``floor = energy``, every equilibrium kept)
+  of an energy vector ``U`` (:class:`VertexEnergies`): the plain escape search on the
   paper's contact graph (:mod:`deformclosure.grasp.release`, whose wrappers validate the
   inputs, SPEC §4);
 * the paper planner's cells ``[x, y]`` of separations (``_Cell`` in
@@ -29,7 +29,9 @@ deformclosure.landscape`` stays light.
 All kernels take the symmetric CSR adjacency ``(indptr, indices)`` of a graph and the
 vertex energies (J); they do not check their inputs. ``cache=True`` keeps the compiled
 code between runs; :func:`minimax_search` is compiled into each caller (``inline``), so
-a caller's oracle and the search are cached together with the caller.
+a caller's oracle and the search are cached together with the caller. (Numba checks a
+cached function only against its own file: after editing this one, delete the callers'
+cache files, ``__pycache__/*.nbi``, ``*.nbc``.)
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ __all__ = ["bottleneck_escape", "minimax_search", "release_sweep", "neighbour_mi
 # --------------------------------------------------------------------------- vertex oracles
 # The oracle protocol: three functions of (oracle, vertex). Compiled code reaches the
 # oracle class's methods through numba overloads registered by `vertex_oracle` (resolved
-# and inlined when the caller is compiled, so an oracle costs no call); run as Python
+# when the caller is compiled; LLVM inlines them, so an oracle costs no call); run as Python
 # (NUMBA_DISABLE_JIT=1) they call the methods directly. The first parameter is named
 # `self` because numba requires the overload and its implementation (the method) to
 # name their parameters alike.
