@@ -8,8 +8,11 @@ keep only their coordinates — the vertices, their neighbours and their energie
 share what is the same on every landscape:
 
 * :func:`~.search.minimax_escape` — the minimax (bottleneck) escape search over a lazy
-  energy oracle; its compiled variant for CSR graphs with all energies known is in
-  :mod:`.kernels` (import it where used: it needs numba);
+  energy oracle; its compiled twin for CSR graphs, :func:`.kernels.minimax_search`, runs
+  over a compiled vertex oracle (:func:`.kernels.vertex_oracle`) that may bound each
+  energy over a cell of the landscape instead of knowing it — the paper planner's cells
+  of separations; an energy vector is its point cell, :func:`.kernels.bottleneck_escape`
+  (import :mod:`.kernels` where used: it needs numba);
 * :mod:`.noise` — the noise-floor rule: from measured discretisation noise to the floor
   ``τ``, and the "beyond the floor" decisions;
 * :mod:`.limit` — the elastic-limit rule;

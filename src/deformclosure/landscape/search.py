@@ -9,9 +9,12 @@ heap idiom ``heappush(fringe, (d, next(c), v))`` with a counter as tie-breaker â
 graph given by a neighbours function and a *lazy* energy oracle: a vertex energy (a
 contact problem) is computed the first time the search needs it, and only then.
 
-The compiled variant for graphs held whole in CSR form, with all energies known
-(the paper model), is :func:`deformclosure.landscape.kernels.bottleneck_escape`; on the
-same graph and energies it finds the same barrier (``tests/test_landscape_search.py``).
+The compiled twin for graphs held whole in CSR form (the paper model) is
+:func:`deformclosure.landscape.kernels.minimax_search`, over a compiled vertex oracle
+that may bound the energies over a cell of the landscape (the paper planner) instead of
+knowing them; with the energies known, :func:`~deformclosure.landscape.kernels.bottleneck_escape`,
+it finds the same barrier as this search (``tests/test_landscape_search.py``; cells:
+``tests/test_landscape_cells.py``).
 
 References
 ----------

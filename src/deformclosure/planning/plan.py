@@ -23,7 +23,10 @@ U_L(s, σ))`` on ``[σ_L(s), σ0(s)]`` (contracting; SPEC §4). The planner repo
    equilibrium ``e`` stays reachable on a cell ``[x, y]`` — its energy is 0, or it has no
    adjacent crossing in the cell, or descending from it can never reach ``s`` — the
    minimax path ``P`` from ``s`` to ``e`` at ``x`` bounds the escape on the whole cell,
-   jumps of ``U_A`` included: ``B(σ) ≤ max_{v∈P} U_v(σ)``. The supremum over the cell
+   jumps of ``U_A`` included: ``B(σ) ≤ max_{v∈P} U_v(σ)``. ``B`` and ``P`` come from one
+   run of the package's one compiled minimax search
+   (:func:`~deformclosure.landscape.kernels.minimax_search`) over the cell's energy
+   bounds ``[U_v(y), U_v(x)]`` (:class:`_Cell`). The supremum over the cell
    of ``max_{v∈P} min(U_v, C) − U_s`` (piecewise quadratic, closed form) is the cell's
    bound — exact where ``P`` is the escape path of the whole cell, with a slack of the
    order of the pair's own energy change ``U_s(x) − U_s(y) ≤ k_s σ0_s (y − x)``
@@ -56,7 +59,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -65,7 +68,8 @@ from numba import njit
 from ..elasticity.stiffness import element_b_matrices
 from ..errors import GraspError
 from ..grasp import pieces as pc
-from ..landscape.kernels import heap_pop, heap_push, path_to
+from ..landscape.kernels import (SearchWorkspace, is_strict_minimum, minimax_search, path_to,
+                                 search_workspace, vertex_oracle)
 from ..grasp.analysis import GraspAnalysis, GraspModel, grasp_model, optimize_separation
 from ..grasp.elastic_limit import elastic_limit_separation
 from ..grasp.release import release_energies
@@ -101,16 +105,63 @@ def _e(x0v, kv, x):  # pragma: no cover - compiled
     return 0.5 * kv * d * d if d > 0.0 else 0.0
 
 
+@vertex_oracle
+class _At(NamedTuple):
+    """The vertex energies at one separation ``x`` (m, contracting frame), a point cell
+    of the paper's landscape (:func:`deformclosure.landscape.kernels.vertex_oracle`)."""
+
+    x0: np.ndarray
+    k: np.ndarray
+    x: float
+
+    def energy(self, v):
+        return _e(self.x0[v], self.k[v], self.x)
+
+    def floor(self, v):
+        return _e(self.x0[v], self.k[v], self.x)
+
+    def kept(self, v):
+        return True
+
+
+@vertex_oracle
+class _Cell(NamedTuple):
+    """A cell ``[x, y]`` of separations (m, contracting frame), searched at ``x``.
+
+    No vertex energy rises with σ, so ``U_v(x)`` is the largest energy of ``v`` over the
+    cell and ``U_v(y)`` the smallest (its floor). An equilibrium at ``x`` stays one on
+    the whole cell when its energy is 0 (energy 0 is never left) or none of its adjacent
+    crossings (``cr_x[cr_ptr[v]:cr_ptr[v + 1]]``, sorted) lies in ``[wlo, whi]``, the cell
+    shifted by the breakpoint tolerance.
+    """
+
+    x0: np.ndarray
+    k: np.ndarray
+    x: float
+    y: float
+    cr_ptr: np.ndarray
+    cr_x: np.ndarray
+    wlo: float
+    whi: float
+
+    def energy(self, v):
+        return _e(self.x0[v], self.k[v], self.x)
+
+    def floor(self, v):
+        return _e(self.x0[v], self.k[v], self.y)
+
+    def kept(self, v):
+        if _e(self.x0[v], self.k[v], self.x) == 0.0:
+            return True
+        cr = self.cr_x[self.cr_ptr[v]:self.cr_ptr[v + 1]]
+        return np.searchsorted(cr, self.wlo) == np.searchsorted(cr, self.whi, side="right")
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _strict_at(indptr, indices, x0, k, s, x):  # pragma: no cover - compiled
     """Whether vertex ``s`` is below all its graph neighbours at σ = ``x`` (a strict local
     minimum of the vertex energies, SPEC §4)."""
-    es = _e(x0[s], k[s], x)
-    for q in range(indptr[s], indptr[s + 1]):
-        w = indices[q]
-        if _e(x0[w], k[w], x) <= es:
-            return False
-    return True
+    return is_strict_minimum(indptr, indices, _At(x0, k, x), s)
 
 
 @njit(cache=True, nogil=True)
@@ -162,112 +213,32 @@ def _k_strict_spans(indptr, indices, x0, k, verts, lo, hi, cr_ptr, cr_x, tols,
 
 
 @njit(cache=True, nogil=True)
-def _k_drains_to(indptr, indices, x0, k, e, level, y, s, seen, stack,
-                 epoch):  # pragma: no cover - compiled
-    """Whether ``s`` lies in the component of ``e`` in ``{v : U_v(y) ≤ level}``."""
-    top = 1
-    stack[0] = e
-    seen[e] = epoch
-    while top > 0:
-        top -= 1
-        v = stack[top]
-        for q in range(indptr[v], indptr[v + 1]):
-            w = indices[q]
-            if seen[w] != epoch and _e(x0[w], k[w], y) <= level:
-                if w == s:
-                    return True
-                seen[w] = epoch
-                stack[top] = w
-                top += 1
-    return False
-
-
-@njit(cache=True, nogil=True)
 def _k_escape(indptr, indices, x0, k, s, x, y, cr_ptr, cr_x, wlo, whi, seen, done, best, pred,
-              hk, hv, bseen, stack, epoch):  # pragma: no cover - compiled
+              hk, hv, bseen, stack, ticket, epoch):  # pragma: no cover - compiled
     """Escape levels of start ``s`` at separation ``x``: ``(strict, B, B_stable, path)``.
 
-    The minimax search of :func:`deformclosure.landscape.kernels.bottleneck_escape` (a
-    path's cost is its largest vertex energy; the same heap, :func:`heap_push`,
-    :func:`heap_pop`, and :func:`path_to`), with the energies computed on the fly so
-    that its work is the explored basin, not the graph. ``B`` is the level of the first
-    equilibrium ``e ≠ s`` it settles — the release level, ``U_A = B − U_s`` when ``s`` is
-    a strict minimum (``strict``).
-
-    The search goes on to the first equilibrium ``e`` that keeps an equilibrium other
-    than ``s`` within reach for every separation in ``[x, y]``: ``U_e(x) = 0`` (energy 0
-    is never left), or no adjacent crossing of ``e`` in ``[wlo, whi]`` (``e`` stays an
+    The one compiled minimax search,
+    :func:`deformclosure.landscape.kernels.minimax_search`, on the cell ``[x, y]``
+    (:class:`_Cell`: energies computed at ``x`` only where the search reaches, so that its
+    work is the explored basin, not the graph). ``B`` is the level of the first
+    equilibrium ``e ≠ s`` it settles — the release level, ``U_A = B − U_s`` when ``s`` is a
+    strict minimum (``strict``). The search goes on to the first equilibrium ``e`` that
+    keeps an equilibrium other than ``s`` within reach for every separation in ``[x, y]``:
+    ``U_e(x) = 0``, or no adjacent crossing of ``e`` in ``[wlo, whi]`` (``e`` stays an
     equilibrium), or ``s`` outside the component of ``e`` in ``{v : U_v(y) ≤ U_e(x)}``
-    (descending from ``e`` at any σ of the cell never reaches ``s``, so it ends at
-    another equilibrium). Its level is ``B_stable ≥ B`` (J), and along the minimax path
-    ``path`` (vertices, ``s`` first) to it ``B(σ) ≤ max_{v ∈ path} U_v(σ)`` for every σ
-    of the cell, since no energy rises with σ. ``inf`` and an empty path where none is
-    reachable. ``seen``/``done``/``best``/``pred``/``bseen`` are workspaces stamped
-    with ``epoch``.
-
-    Why not ``bottleneck_escape`` itself: this is a different search, not a second copy
-    of it. It does not stop at the first equilibrium but records its level (``B``) and
-    goes on to the first one that stays an equilibrium on the whole cell ``[x, y]``
-    (crossing lists ``cr_ptr``/``cr_x`` and the descent test :func:`_k_drains_to`); it
-    computes energies from ``(x0, k)`` at σ = ``x`` instead of reading a vector (the
-    planner would otherwise evaluate every vertex per call), and it reuses
-    epoch-stamped workspaces across the millions of calls of a plan. What is shared is
-    shared: the heap and the path reconstruction.
+    (descending from ``e`` at any σ of the cell never reaches ``s``). Its level is
+    ``B_stable ≥ B`` (J), and along the minimax path ``path`` (vertices, ``s`` first) to it
+    ``B(σ) ≤ max_{v ∈ path} U_v(σ)`` for every σ of the cell, since no energy rises with
+    σ. ``inf`` and an empty path where none is reachable. ``seen`` … ``ticket`` are the
+    fields of the plan's :class:`~deformclosure.landscape.kernels.SearchWorkspace`
+    (passed apart: unboxing a tuple costs more than the search), ``epoch`` this search's
+    number.
     """
-    us = _e(x0[s], k[s], x)
-    strict = _strict_at(indptr, indices, x0, k, s, x)
-    first = np.inf
-    size = 0
-    best[s] = us
-    seen[s] = epoch
-    pred[s] = -1
-    size = heap_push(hk, hv, size, us, s)
-    target = -1
-    level = np.inf
-    while size > 0:
-        d = hk[0]
-        v = hv[0]
-        size = heap_pop(hk, hv, size)
-        if done[v] == epoch:
-            continue
-        done[v] = epoch
-        if v != s:
-            uv = _e(x0[v], k[v], x)
-            eq = True
-            for q in range(indptr[v], indptr[v + 1]):
-                w = indices[q]
-                if _e(x0[w], k[w], x) < uv:
-                    eq = False
-                    break
-            if eq:
-                if d < first:
-                    first = d
-                stable = uv == 0.0
-                if not stable:
-                    c0 = cr_ptr[v]
-                    c1 = cr_ptr[v + 1]
-                    i0 = np.searchsorted(cr_x[c0:c1], wlo)
-                    i1 = np.searchsorted(cr_x[c0:c1], whi, side="right")
-                    stable = i1 == i0
-                if not stable:
-                    stable = not _k_drains_to(indptr, indices, x0, k, v, uv * (1.0 + 1e-12), y,
-                                              s, bseen, stack, epoch)
-                if stable:
-                    target = v
-                    level = d
-                    break
-        for q in range(indptr[v], indptr[v + 1]):
-            w = indices[q]
-            if done[w] == epoch:
-                continue
-            uw = _e(x0[w], k[w], x)
-            nd = d if d >= uw else uw
-            if seen[w] != epoch or nd < best[w]:
-                seen[w] = epoch
-                best[w] = nd
-                pred[w] = v
-                size = heap_push(hk, hv, size, nd, w)
-    return strict, first, level, path_to(pred, target)
+    cell = _Cell(x0, k, x, y, cr_ptr, cr_x, wlo, whi)
+    ws = SearchWorkspace(seen, done, best, pred, hk, hv, bseen, stack, ticket)
+    strict = is_strict_minimum(indptr, indices, cell, s)
+    first, level, target = minimax_search(indptr, indices, cell, s, ws, epoch)
+    return strict, first, level, path_to(ws.pred, target)
 
 
 @njit(cache=True, nogil=True)
@@ -315,15 +286,7 @@ class _Workspace:
         self.x0 = np.ascontiguousarray(x0, dtype=float)
         self.k = np.ascontiguousarray(k, dtype=float)
         self.cr_ptr, self.cr_x, self.tol = cr_ptr, cr_x, float(tol)
-        V = len(self.x0)
-        self.seen = np.full(V, -1, np.int64)
-        self.done = np.full(V, -1, np.int64)
-        self.best = np.empty(V)
-        self.pred = np.empty(V, np.int64)
-        self.bseen = np.full(V, -1, np.int64)
-        self.stack = np.empty(V, np.int64)
-        self.hk = np.empty(self.indices.shape[0] + 1)
-        self.hv = np.empty(self.indices.shape[0] + 1, np.int64)
+        self.buf = search_workspace(len(self.x0), self.indices.shape[0])
         self.epoch = 0
         self.n_eval = 0
 
@@ -340,9 +303,7 @@ class _Workspace:
         self.epoch += 1
         self.n_eval += 1
         return _k_escape(self.indptr, self.indices, self.x0, self.k, s, x, y, self.cr_ptr,
-                         self.cr_x, x - tol, y - tol, self.seen, self.done,
-                         self.best, self.pred, self.hk, self.hv, self.bseen, self.stack,
-                         self.epoch)
+                         self.cr_x, x - tol, y - tol, *self.buf, self.epoch)
 
 
 def _crossing_lists(x0: np.ndarray, k: np.ndarray, edges: np.ndarray, lo: float, hi: float,
