@@ -29,9 +29,9 @@ from deformclosure import reports
 from deformclosure.elasticity.error import bulk_marking, recovered_strain_indicator
 from deformclosure.mesh.generate import twin_mesh
 from deformclosure.mesh.sizing import Sizing
-from deformclosure.pads import GraspAxis, Pad, PadContact, optimize_pads, pad_grasp
+from deformclosure.pads import GraspAxis, Pad, PadContact, pad_grasp
 from deformclosure.pads.landscape import AxisGrid
-from deformclosure.pads.refine import level_error
+from deformclosure.pads.refine import level_error, solve_level
 from deformclosure.pads.saddle_grid import SaddleRefinedGrid
 
 MM = 1e-3
@@ -111,21 +111,19 @@ def _run(name: str, rtol: float):
 
 @functools.lru_cache(maxsize=None)
 def _reference(name: str):
-    """The finest level of the rtol 0.05 run refined twice more: every element's area / 16
-    (its twin alike), the landscape's factor × 4 around every saddle found."""
+    """The finest level of the rtol 0.05 run refined twice more, uniformly: every
+    element's area / 16 (its twin alike), and the landscape two levels finer (factor × 4)
+    around every saddle found, by the levels' own rule (:func:`solve_level`)."""
     part, (p, q), rho = PARTS[name]
     run = _run(name, 0.05)
-    fine = run.finest
-    mesh = fine.solver.mesh
-    default = float(part.mesh_options.max_area) / 16.0
+    mesh = run.finest.solver.mesh
+    default = float(mesh.areas.max()) / 16.0
     sizing = Sizing(default, points=mesh.nodes[mesh.triangles].mean(axis=1),
                     areas=mesh.areas / 16.0)
     ref_mesh = dc.mesh_part(part, max_area=default, sizing=sizing)
-    twin = PadContact(twin_mesh(part, max_area=default, sizing=sizing))
-    saddles = [r.saddle for r in run.levels if r.saddle is not None]
-    factor = 4 * 2 ** (len(run.levels) - 1)
-    return optimize_pads(ref_mesh, _axis(p, q), Pad(0.0, rho * MM), twin=twin,
-                         saddles=(factor, saddles) if saddles else None, **GRID)
+    twin = twin_mesh(part, max_area=default, sizing=sizing)
+    return solve_level(ref_mesh, twin, _axis(p, q), Pad(0.0, rho * MM), len(run.levels) + 1,
+                       list(run.saddles), None, GRID)
 
 
 def _quantities(res) -> dict:

@@ -46,7 +46,7 @@ from .geometry import GraspAxis, Pad
 from .optimize import PadGraspResult, optimize_pads
 
 __all__ = ["RefinedPadGrasp", "richardson", "pad_grasp", "level_error", "check_accuracy",
-           "DEFAULT_RTOL", "DEFAULT_MAX_SECONDS"]
+           "DEFAULT_RTOL", "DEFAULT_MAX_SECONDS", "solve_level"]
 
 #: Keyword options :func:`pad_grasp` passes on to :func:`optimize_pads`.
 _OPTIONS = frozenset({"n_angles", "n_offsets", "n_samples", "n_curve", "noise"})
@@ -130,6 +130,10 @@ class RefinedPadGrasp:
         Whether the meshes were refined adaptively.
     stopped : str or None
         Why refinement ended before converging (time, memory, levels).
+    seconds : list of float
+        Time (s) of each level.
+    saddles : list of GraspAxis
+        Every saddle the levels refined the landscape around.
     """
 
     levels: list[PadGraspResult]
@@ -138,6 +142,7 @@ class RefinedPadGrasp:
     adaptive: bool = False
     stopped: str | None = None
     seconds: list[float] = field(default_factory=list)
+    saddles: list = field(default_factory=list)
 
     @property
     def finest(self) -> PadGraspResult:
@@ -318,14 +323,14 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int | None 
         t0 = time.perf_counter()
         m = mesh if k == 0 else mesh_part(part, max_area=area)
         tw = twin_mesh(part, max_area=area) if (twin and part is not None) else None
-        levels.append(_solve_level(m, tw, axis, pad, k, saddles, expanding_from, options))
+        levels.append(solve_level(m, tw, axis, pad, k, saddles, expanding_from, options))
         areas.append(area)
         seconds.append(time.perf_counter() - t0)
         _log_level(t0, k, n, levels[-1])
-    return RefinedPadGrasp(levels, areas, None, False, None, seconds)
+    return RefinedPadGrasp(levels, areas, None, False, None, seconds, saddles)
 
 
-def _solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
+def solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
                  expanding_from, options: dict, most: int = 4) -> PadGraspResult:
     """Level ``k``: the grasp on ``mesh`` (twin ``twin_m``), its landscape refined ``2^k``
     times around ``saddles`` (the earlier levels' saddles, to which this one's is added).
@@ -386,11 +391,11 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
             stopped = f"memory or size limit at level {k + 1}: {err}"
             break
         tw = twin_mesh(part, max_area=sizing.default, sizing=sizing) if twin else None
-        levels.append(_solve_level(mesh, tw, axis, pad, k, saddles, expanding_from, options))
+        levels.append(solve_level(mesh, tw, axis, pad, k, saddles, expanding_from, options))
         areas.append(float(mesh.areas.max()))
         seconds.append(time.perf_counter() - t0)
         _log_level(t0, k, MAX_LEVELS, levels[-1])
-        run = RefinedPadGrasp(levels, areas, rtol, adaptive, None, seconds)
+        run = RefinedPadGrasp(levels, areas, rtol, adaptive, None, seconds, saddles)
         if run.converged:
             return run
         if k + 1 == MAX_LEVELS:
@@ -403,7 +408,7 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
                        f"--max-seconds {max_seconds:g}")
             break
         sizing = next_sizing(levels[-1], sizing) if adaptive else Sizing(sizing.default / 4.0)
-    return RefinedPadGrasp(levels, areas, rtol, adaptive, stopped, seconds)
+    return RefinedPadGrasp(levels, areas, rtol, adaptive, stopped, seconds, saddles)
 
 
 def check_accuracy(rtol, max_seconds) -> None:
