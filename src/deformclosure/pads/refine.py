@@ -184,7 +184,9 @@ class RefinedPadGrasp:
         """``"held"``, ``"not held"`` or ``"undecided"`` (module docstring)."""
         fine = self.finest
         if len(self.levels) < 2:
-            return fine.verdict
+            # one mesh asked for as such keeps its own verdict; a refinement cut short
+            # after one level has no bounds to decide anything
+            return fine.verdict if self.rtol is None else "undecided"
         e = self.error_estimate()
         ua, eua = fine.U_A, e["U_A"]
         floor = fine.noise
@@ -401,7 +403,10 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
         if k + 1 == MAX_LEVELS:
             stopped = f"{MAX_LEVELS} levels solved"
             break
-        growth = seconds[-1] / seconds[-2] if len(seconds) > 1 and seconds[-2] > 0 else 4.0
+        # the next level's time: the last growth, else a prior (an adaptive level adds
+        # about half the elements again, a uniform one four times as many)
+        prior = 2.5 if adaptive else 4.0
+        growth = seconds[-1] / seconds[-2] if len(seconds) > 1 and seconds[-2] > 0 else prior
         predicted = seconds[-1] * min(max(growth, 1.5), 16.0)
         if time.perf_counter() - t_start + predicted > max_seconds:
             stopped = (f"time budget: level {k + 2} would take about {predicted:.0f} s, beyond "

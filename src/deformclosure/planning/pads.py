@@ -16,6 +16,8 @@ verified rows that are held.
 
 from __future__ import annotations
 
+import time
+
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -279,14 +281,18 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
 
     first_gap = next((k for k, r in enumerate(rows) if r["quality"] <= 0), len(rows))
     candidates = rows[:first_gap]
-    budget = (DEFAULT_MAX_SECONDS if max_seconds is None else max_seconds) / max(len(candidates), 1)
+    total = DEFAULT_MAX_SECONDS if max_seconds is None else max_seconds
+    t_start = time.perf_counter()
     opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
     verified = []
-    for r in candidates:
+    for n, r in enumerate(candidates):
         ax = GraspAxis(r["angle"], r["offset"], tuple(solver.centroid))
         if part is not None:
+            # the time left, shared by the rows left (a quick row leaves more to the next)
+            left = max(total - (time.perf_counter() - t_start), 1e-3)
             res = pad_grasp(part, ax, pad, rtol=DEFAULT_RTOL if rtol is None else rtol,
-                            max_seconds=budget, max_area=default_max_area(part), **opts)
+                            max_seconds=left / (len(candidates) - n),
+                            max_area=default_max_area(part), **opts)
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
             extra = {"converged": res.converged, "n_levels": len(res.levels)}
         else:
