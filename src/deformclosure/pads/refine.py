@@ -10,7 +10,9 @@ of levels carries the error of both.
 **Error estimate.** From the values ``X₁ … X_k`` of ``quality``, ``U_A`` and ``sigma_star``
 on the levels, the Richardson estimate of :func:`richardson` (observed order from three
 levels, ``p = 1`` from two), never less than the last change ``|X_k − X_{k−1}|``: a
-sequence that does not shrink monotonically gets no credit for it. The estimate is a
+sequence that does not shrink monotonically gets no credit for it. σ*, the argmax of
+``Q``, moves further than its own level changes show when the curves move: its
+estimate is at least ``e_Q / |F|`` (``F`` the pad force, the slope of ``U_L``). The estimate is a
 claim about the next level; the tests check that it brackets a much finer answer.
 
 **Refinement to ``rtol``** (default 0.05): levels are added until the estimate of Q* and of
@@ -168,8 +170,14 @@ class RefinedPadGrasp:
         else:
             tail = S[-3:] if len(S) >= 3 and S[-3] is not None else S[-2:]
             eS = level_error(tail)
-        return {"quality": level_error(self._values("quality")),
-                "U_A": level_error(self._values("U_A")), "sigma_star": eS}
+        eQ = level_error(self._values("quality"))
+        force = self.finest.force
+        if eS is not None and eQ is not None and force and math.isfinite(eQ):
+            # σ* sits where Q = min(U_A, U_L) peaks; U_L's slope there is the pad force
+            # (dU_L/dσ = −dU/dσ = F), so an error eQ in the curves moves σ* by up to
+            # eQ / |F| (at a crossing the two slopes have opposite signs: never more)
+            eS = max(eS, eQ / abs(force))
+        return {"quality": eQ, "U_A": level_error(self._values("U_A")), "sigma_star": eS}
 
     @property
     def converged(self) -> bool:
