@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import functools
+import json
 import math
 
 import numpy as np
@@ -26,6 +27,7 @@ from hypothesis import given, settings, strategies as st
 
 import deformclosure as dc
 from deformclosure import reports
+from deformclosure.jsonfile import Source
 from deformclosure.elasticity.error import bulk_marking, recovered_strain_indicator
 from deformclosure.mesh.generate import twin_mesh
 from deformclosure.mesh.sizing import Sizing
@@ -66,9 +68,12 @@ def _axis(p, q) -> GraspAxis:
 
 
 def _optimize(part: dc.Part, at, radius: float, **extra) -> dict:
+    """``optimize`` at its default settings (but a coarser landscape), the part given as
+    the bytes of its part file."""
     params = {"at": tuple(f"{x},{y}" for x, y in at), "pad_radius": radius,
               "grid_angles": 24, "grid_offsets": 30, **extra}
-    return reports.run("optimize", part, params).data
+    src = Source(f"{part.name}.json", json.dumps(part.to_dict()).encode())
+    return reports.run("optimize", src, params).data
 
 
 @pytest.mark.slow

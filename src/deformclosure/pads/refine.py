@@ -12,7 +12,8 @@ on the levels, the Richardson estimate of :func:`richardson` (observed order fro
 levels, ``p = 1`` from two), never less than the last change ``|X_k − X_{k−1}|``: a
 sequence that does not shrink monotonically gets no credit for it. σ*, the argmax of
 ``Q``, moves further than its own level changes show when the curves move: its
-estimate is at least ``e_Q / |F|`` (``F`` the pad force, the slope of ``U_L``). The estimate is a
+estimate is at least ``(e_Q + e_{U(σ_L)}) / |F|`` (``F`` the pad force, the slope of
+``U_L``; ``U(σ_L)`` its level). The estimate is a
 claim about the next level; the tests check that it brackets a much finer answer.
 
 **Refinement to ``rtol``** (default 0.05): levels are added until the estimate of Q* and of
@@ -171,12 +172,15 @@ class RefinedPadGrasp:
             tail = S[-3:] if len(S) >= 3 and S[-3] is not None else S[-2:]
             eS = level_error(tail)
         eQ = level_error(self._values("quality"))
+        eUL = level_error([r.start_curve.energy_at(r.sigma_L) for r in self.levels])
         force = self.finest.force
-        if eS is not None and eQ is not None and force and math.isfinite(eQ):
+        if eS is not None and eQ is not None and eUL is not None and force \
+                and math.isfinite(eQ + eUL):
             # σ* sits where Q = min(U_A, U_L) peaks; U_L's slope there is the pad force
-            # (dU_L/dσ = −dU/dσ = F), so an error eQ in the curves moves σ* by up to
-            # eQ / |F| (at a crossing the two slopes have opposite signs: never more)
-            eS = max(eS, eQ / abs(force))
+            # (dU_L/dσ = −dU/dσ = F). Errors eQ in the curve that limits and eUL in U_L's
+            # level U(σ_L) move the peak by up to (eQ + eUL) / |F| (at a crossing the two
+            # slopes have opposite signs, so the shift is never more)
+            eS = max(eS, (eQ + eUL) / abs(force))
         return {"quality": eQ, "U_A": level_error(self._values("U_A")), "sigma_star": eS}
 
     @property
