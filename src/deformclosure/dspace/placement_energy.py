@@ -90,6 +90,9 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
+# numba's cache of this module's kernels (cache=True) keys on this file alone: after an edit
+# of contact/lcp.py, delete this package's __pycache__/*.nbi, *.nbc or the kernels keep the
+# old bpp_kernel (numba's documented limit on functions from other files)
 from ..contact.lcp import bpp_kernel
 from ..contact.bodies import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
