@@ -90,6 +90,9 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
+# numba's cache of this module's kernels (cache=True) keys on this file alone: after an edit
+# of contact/lcp.py, delete this package's __pycache__/*.nbi, *.nbc or the kernels keep the
+# old bpp_kernel (numba's documented limit on functions from other files)
 from ..contact.lcp import bpp_kernel
 from ..contact.bodies import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
@@ -151,37 +154,67 @@ def _place_fingers(g, c, ftype, fpar, verts, vnorm):  # pragma: no cover - compi
     return par, pv, pn, po
 
 
+# disc sides of a boundary point (:func:`_disc_side`)
+_FRONT, _BACK_WALL, _BEHIND = 0, 1, 2
+
+
 @njit(cache=True, nogil=True)
-def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no cover - compiled
-    """Signed distance and outward unit normal of a finger body at boundary point (px, py),
-    where the part's inward normal is (nx, ny) (unnormalised)."""
-    if t == _DISC:
-        dx, dy = px - par[0], py - par[1]
-        r = par[2]
-        # within the pad's contact reach and not behind the disc: the gap along the disc's
-        # axis to its surface at the node's cross coordinate (SPEC §6), scaled to a unit
-        # gradient (the disc's normal at that surface point). Behind the disc (s < −r) the
-        # radial distance, except in material the disc is pressed into by more than its
-        # diameter — the node's boundary does not face the disc's back (inward normal
-        # within 45° of minus the axis: the far wall of a hole) and the disc's back at
-        # the node's cross coordinate (at most the reach) lies inside the part — where the
-        # pad's rule holds (SPEC §6: the gap along the axis, exact in the pad's motion,
-        # within the reach; not enforced beyond it).
-        ax, ay = par[3], par[4]
+def _disc_side(cx, cy, r, ax, ay, reach, px, py, nx, ny):  # pragma: no cover - compiled
+    """Which rule a boundary point ``(px, py)`` with inward normal ``(nx, ny)``
+    (unnormalised) follows against the disc ``(cx, cy, r)`` pressing along ``(ax, ay)``
+    with contact reach ``reach``: ``_FRONT`` — not behind the disc (``s ≥ −r`` along its
+    axis): the pad's gap along the axis; ``_BACK_WALL`` — behind it, on a boundary facing
+    its back (inward normal within 45° of minus the axis: the far wall of a hole): the
+    radial distance; ``_BEHIND`` — behind it elsewhere: the pad's rule when the disc's
+    back at the point's cross coordinate (clipped to the reach) is buried in the part
+    (:func:`_buried`), else the radial distance. Returns ``(side, clipped cross
+    coordinate)``. Scalars only, so the scans' per-node loop passes no arrays."""
+    dx, dy = px - cx, py - cy
+    if dx * ax + dy * ay >= -r:
+        return _FRONT, 0.0
+    if nx * ax + ny * ay > -_HALF_SQRT2 * np.hypot(nx, ny):
+        x = -dx * ay + dy * ax
+        return _BEHIND, min(max(x, -reach), reach)
+    return _BACK_WALL, 0.0
+
+
+@njit(cache=True, nogil=True)
+def _disc_sd(cx, cy, r, ax, ay, reach, px, py, axial):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of the disc of :func:`_disc_side` at
+    ``(px, py)``: with ``axial`` the gap along the disc's axis to its surface at the
+    point's cross coordinate (SPEC §6), scaled to a unit gradient (the disc's normal at
+    that surface point), and not enforced (``inf``) beyond the reach — the pad's steep
+    flanks (beyond 75° from the axis) and its sides; otherwise the radial distance."""
+    dx, dy = px - cx, py - cy
+    if axial:
         s = dx * ax + dy * ay
         x = -dx * ay + dy * ax
-        if s >= -r or (nx * ax + ny * ay > -_HALF_SQRT2 * np.hypot(nx, ny)
-                       and _buried(par[0], par[1], ax, ay, min(max(x, -par[5]), par[5]), r, part)):
-            if abs(x) >= par[5]:
-                # the pad's steep flanks (beyond 75° from the axis) and its sides: not
-                # enforced, as for pads (SPEC §6)
-                return np.inf, ax, ay
-            root = np.sqrt(r * r - x * x)
-            return (s - root) * root / r, (ax * root - ay * x) / r, (ay * root + ax * x) / r
-        d = np.sqrt(dx * dx + dy * dy)
-        if d > 0:
-            return d - r, dx / d, dy / d
-        return -r, 1.0, 0.0
+        if abs(x) >= reach:
+            return np.inf, ax, ay
+        root = np.sqrt(r * r - x * x)
+        return (s - root) * root / r, (ax * root - ay * x) / r, (ay * root + ax * x) / r
+    d = np.sqrt(dx * dx + dy * dy)
+    if d > 0:
+        return d - r, dx / d, dy / d
+    return -r, 1.0, 0.0
+
+
+@njit(cache=True, nogil=True)
+def _disc_point_sd(par, px, py, nx, ny, xb, ea, eb, box):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of the disc finger ``par`` (``(cx, cy, r,
+    ax, ay, reach)``) at the boundary point ``(px, py)`` with inward normal ``(nx, ny)``
+    (unnormalised): the disc rule of SPEC §6/§7 (:func:`_disc_side`, :func:`_buried`,
+    :func:`_disc_sd`); ``box`` is the part's bounding box (:func:`_bbox`)."""
+    cx, cy, r, ax, ay, reach = par[0], par[1], par[2], par[3], par[4], par[5]
+    side, xc = _disc_side(cx, cy, r, ax, ay, reach, px, py, nx, ny)
+    axial = side == _FRONT or (side == _BEHIND and _buried(cx, cy, ax, ay, xc, r, xb, ea, eb, box))
+    return _disc_sd(cx, cy, r, ax, ay, reach, px, py, axial)
+
+
+@njit(cache=True, nogil=True)
+def _solid_sd(t, par, vs, ve, pv, pn, po, px, py):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of a half-plane or convex polygon finger at
+    ``(px, py)``."""
     if t == _HALFPLANE:
         return (px - par[0]) * par[2] + (py - par[1]) * par[3], par[2], par[3]
     # convex polygon
@@ -210,12 +243,68 @@ def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no co
 
 
 @njit(cache=True, nogil=True)
-def _buried(cx, cy, ax, ay, x, r, part):  # pragma: no cover - compiled
+def _body_sd(t, par, vs, ve, pv, pn, po, px, py, nx, ny, part):  # pragma: no cover - compiled
+    """Signed distance and outward unit normal of a finger body at boundary point (px, py),
+    where the part's inward normal is (nx, ny) (unnormalised): :func:`_disc_point_sd` for
+    a disc, :func:`_solid_sd` otherwise. (The scans call the two directly.)"""
+    if t == _DISC:
+        return _disc_point_sd(par, px, py, nx, ny, part[0], part[1], part[2], _bbox(part[0]))
+    return _solid_sd(t, par, vs, ve, pv, pn, po, px, py)
+
+
+@njit(cache=True, nogil=True)
+def _bbox(xb):  # pragma: no cover - compiled
+    """Bounding box ``(xmin, xmax, ymin, ymax)`` of the boundary nodes, widened by 1e-6 of
+    its half-perimeter: a point outside it is outside the part, also for the even-odd test
+    of :func:`_inside` in floating point (whose crossing abscissae stray from their edges
+    by round-off only)."""
+    x0, x1, y0, y1 = np.inf, -np.inf, np.inf, -np.inf
+    for i in range(xb.shape[0]):
+        x0, x1 = min(x0, xb[i, 0]), max(x1, xb[i, 0])
+        y0, y1 = min(y0, xb[i, 1]), max(y1, xb[i, 1])
+    m = 1e-6 * ((x1 - x0) + (y1 - y0)) if xb.shape[0] > 0 else 0.0
+    return x0 - m, x1 + m, y0 - m, y1 + m
+
+
+@njit(cache=True, nogil=True)
+def _buried(cx, cy, ax, ay, x, r, xb, ea, eb, box):  # pragma: no cover - compiled
     """Whether the back of the disc (centre ``(cx, cy)``, radius ``r``, axis ``(ax, ay)``)
-    at cross coordinate ``x`` (``|x| < r``) lies inside the part at rest."""
+    at cross coordinate ``x`` (``|x| < r``) lies inside the part at rest (``box``: its
+    bounding box, :func:`_bbox`, which decides most points without walking the boundary)."""
+    px, py = _disc_back(cx, cy, ax, ay, x, r)
+    return _in_box(px, py, box) and _inside(px, py, xb, ea, eb)
+
+
+@njit(cache=True, nogil=True)
+def _disc_back(cx, cy, ax, ay, x, r):  # pragma: no cover - compiled
+    """The point of the disc's back at cross coordinate ``x`` (:func:`_buried`)."""
     sb = -np.sqrt(r * r - x * x)
-    px, py = cx + sb * ax - x * ay, cy + sb * ay + x * ax
-    return _inside_and_distance(px, py, part[0], part[1], part[2])[0]
+    return cx + sb * ax - x * ay, cy + sb * ay + x * ax
+
+
+@njit(cache=True, nogil=True)
+def _in_box(px, py, box):  # pragma: no cover - compiled
+    """Whether ``(px, py)`` lies in the box ``(xmin, xmax, ymin, ymax)``."""
+    return box[0] <= px <= box[1] and box[2] <= py <= box[3]
+
+
+@njit(cache=True, nogil=True)
+def _crosses(px, py, ax, ay, bx, by):  # pragma: no cover - compiled
+    """Whether the edge ``a → b`` crosses the ray from ``(px, py)`` towards ``+x`` (the
+    even-odd rule)."""
+    if (ay > py) != (by > py):
+        return px < ax + (py - ay) * (bx - ax) / (by - ay)
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _inside(px, py, xb, ea, eb):  # pragma: no cover - compiled
+    """Even-odd membership of (px, py) in the part."""
+    inside = False
+    for e in range(ea.shape[0]):
+        if _crosses(px, py, xb[ea[e], 0], xb[ea[e], 1], xb[eb[e], 0], xb[eb[e], 1]):
+            inside = not inside
+    return inside
 
 
 @njit(cache=True, nogil=True)
@@ -226,10 +315,8 @@ def _inside_and_distance(px, py, xb, ea, eb):  # pragma: no cover - compiled
     for e in range(ea.shape[0]):
         ax, ay = xb[ea[e], 0], xb[ea[e], 1]
         bx, by = xb[eb[e], 0], xb[eb[e], 1]
-        if (ay > py) != (by > py):
-            xint = ax + (py - ay) * (bx - ax) / (by - ay)
-            if px < xint:
-                inside = not inside
+        if _crosses(px, py, ax, ay, bx, by):
+            inside = not inside
         ex, ey = bx - ax, by - ay
         den = ex * ex + ey * ey
         s = ((px - ax) * ex + (py - ay) * ey) / den if den > 0 else 0.0
@@ -290,15 +377,30 @@ def _node_inward(part, i):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth):  # pragma: no cover
+def _body_rows(f, t, parf, vs, ve, fg, part, box, radius, emit, rows, n, pmax, depth):  # pragma: no cover
     """Boundary nodes against the body of finger ``f``: rows with a gap below ``radius``
-    (when ``emit``), and the deepest node. Returns ``(n, any node inside, pmax, depth)``."""
+    (when ``emit``), and the deepest node. Returns ``(n, any node inside, pmax, depth)``.
+    ``box``: the part's bounding box (:func:`_bbox`)."""
     pv, pn, po = fg[1], fg[2], fg[3]
-    xb = part[0]
+    xb, ea, eb = part[0], part[1], part[2]
+    cx, cy, r, ax, ay, reach = parf[0], parf[1], parf[2], parf[3], parf[4], parf[5]
     anyin = False
     for i in range(xb.shape[0]):
-        nx, ny = _node_inward(part, i)
-        sd, ox, oy = _body_sd(t, parf, vs, ve, pv, pn, po, xb[i, 0], xb[i, 1], nx, ny, part)
+        px, py = xb[i, 0], xb[i, 1]
+        if t == _DISC:
+            # :func:`_disc_point_sd`, with the arrays passed only where the buried test
+            # needs them (a call taking arrays in this loop costs more than the geometry)
+            nx, ny = _node_inward(part, i)
+            side, xc = _disc_side(cx, cy, r, ax, ay, reach, px, py, nx, ny)
+            axial = side == _FRONT
+            if side == _BEHIND:
+                # :func:`_buried`, the box test first (most points behind a disc are
+                # far from the part)
+                qx, qy = _disc_back(cx, cy, ax, ay, xc, r)
+                axial = _in_box(qx, qy, box) and _inside(qx, qy, xb, ea, eb)
+            sd, ox, oy = _disc_sd(cx, cy, r, ax, ay, reach, px, py, axial)
+        else:
+            sd, ox, oy = _solid_sd(t, parf, vs, ve, pv, pn, po, px, py)
         if sd < 0:
             anyin = True
         if -sd > pmax:
@@ -306,18 +408,18 @@ def _body_rows(f, t, parf, vs, ve, fg, part, radius, emit, rows, n, pmax, depth)
         if -sd > depth and t != _DISC:    # a disc is a round pad: no depth limit (SPEC §6)
             depth = -sd
         if emit and sd < radius:
-            n = _put(rows, n, _NODE_BODY, f, -1, i, i, i, 1.0, 0.0, ox, oy, sd, xb[i, 0], xb[i, 1])
+            n = _put(rows, n, _NODE_BODY, f, -1, i, i, i, 1.0, 0.0, ox, oy, sd, px, py)
     return n, anyin, pmax, depth
 
 
 @njit(cache=True, nogil=True)
-def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax):  # pragma: no cover
+def _disc_edges(f, parf, part, box, wx, wy, off, radius, emit, rows, n, pmax):  # pragma: no cover
     """A disc outside the part with no node inside it, against the edges whose foot point
     it faces and whose end nodes are outside it: between two nodes a straight edge may cut
     the disc while both stay outside it (a mesh coarse for the disc). One pass serves both
     uses: with ``emit`` it stores the rows with a gap below ``radius``, without it raises
     ``pmax`` to the deepest such cut. Returns ``(n, pmax)``."""
-    pv, pn, po = fg[1], fg[2], fg[3]
+    xb, ea, eb = part[0], part[1], part[2]
     for e in range(part[1].shape[0]):
         ax, ay, ex, ey, s, gl = _foot(part, e, wx, wy)
         if s <= 0.0 or s >= 1.0:
@@ -329,8 +431,8 @@ def _disc_edges(f, t, parf, vs, ve, fg, part, wx, wy, off, radius, emit, rows, n
             continue
         na, ma = _node_inward(part, part[1][e])
         nb, mb = _node_inward(part, part[2][e])
-        sa = _body_sd(t, parf, vs, ve, pv, pn, po, ax, ay, na, ma, part)[0]
-        sb = _body_sd(t, parf, vs, ve, pv, pn, po, ax + ex, ay + ey, nb, mb, part)[0]
+        sa = _disc_point_sd(parf, ax, ay, na, ma, xb, ea, eb, box)[0]
+        sb = _disc_point_sd(parf, ax + ex, ay + ey, nb, mb, xb, ea, eb, box)[0]
         if sa > 0 and sb > 0:
             if emit:
                 n = _put_edge(rows, n, _DISC_EDGE, f, -1, part, e, s, gl - off)
@@ -409,7 +511,7 @@ def _vertex_rows(f, k, part, wx, wy, off, inside, dmin, got, radius, rows, n):  
 
 
 @njit(cache=True, nogil=True)
-def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, depth):  # pragma: no cover
+def _corner_rows(f, t, vs, ve, fg, part, box, radius, emit, anyin, rows, n, pmax, depth):  # pragma: no cover
     """The corners of finger ``f`` (point finger, polygon corners) and a disc's centre:
     inside the part they set the depth and press on their nearest edge or vertex; outside,
     corners press on edges and convex vertices, and a disc on the edges cutting it.
@@ -435,7 +537,7 @@ def _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, dep
                 pmax = dmin + off
         elif t == _DISC:
             if not anyin:       # once a node is inside, the node rows of SPEC §6 see the disc
-                n, pmax = _disc_edges(f, t, par[f], vs, ve, fg, part, wx, wy, off, radius, emit, rows, n, pmax)
+                n, pmax = _disc_edges(f, par[f], part, box, wx, wy, off, radius, emit, rows, n, pmax)
             continue
         if not emit or (t == _DISC and anyin):
             # once a node is inside a disc, the node rows of SPEC §6 alone see it (as
@@ -465,6 +567,7 @@ def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, 
     """
     fg = _place_fingers(g, c, ftype, fpar, verts, vnorm)
     part = (xb, ea, eb, en, el2, eprev, enext, convex)
+    box = _bbox(xb)
     rows = _new_rows(cap)
     n = 0
     pmax = 0.0
@@ -474,9 +577,9 @@ def _scan(g, radius, emit, c, xb, ea, eb, en, el2, eprev, enext, convex, ftype, 
         vs, ve = vstart[f], vstart[f + 1]
         anyin = False
         if t != _POINT:
-            n, anyin, pmax, depth = _body_rows(f, t, fg[0][f], vs, ve, fg, part, radius, emit, rows, n, pmax,
-                                               depth)
-        n, pmax, depth = _corner_rows(f, t, vs, ve, fg, part, radius, emit, anyin, rows, n, pmax, depth)
+            n, anyin, pmax, depth = _body_rows(f, t, fg[0][f], vs, ve, fg, part, box, radius, emit, rows, n,
+                                               pmax, depth)
+        n, pmax, depth = _corner_rows(f, t, vs, ve, fg, part, box, radius, emit, anyin, rows, n, pmax, depth)
     return (n, rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6], rows[7], rows[8], rows[9],
             rows[10], rows[11], rows[12], pmax, depth)
 

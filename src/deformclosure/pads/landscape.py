@@ -39,6 +39,11 @@ from .geometry import GraspAxis, Pad
 __all__ = ["AxisGrid", "Landscape", "Release"]
 
 
+def _out_of_reach(sigma: float) -> float:
+    """The energy of an axis the pads cannot reach (:meth:`Landscape.energy`)."""
+    return math.inf
+
+
 @dataclass(frozen=True)
 class AxisGrid:
     """A ``(θ, c)`` grid of axes anchored at a start axis; ``c`` about ``origin``.
@@ -175,6 +180,12 @@ class Landscape:
         self._curves: dict[int, GraspCurve] = {}
         self.twin: Landscape | None = None
         self._measured: list[int] = []
+        # caches of pure functions of a vertex (and σ, floor): the searches ask for the
+        # same neighbours, energies and releases many times
+        self._nbrs: dict[int, list[int]] = {}
+        self._energy_at: dict[int, object] = {}
+        self._releases: dict[tuple, Release] = {}
+        self._noise: dict[tuple, float] = {}
 
     def measure_noise(self, most: int = 48) -> bool:
         """Solve axes visited so far on the twin realisation, at most ``most`` in all
@@ -200,13 +211,20 @@ class Landscape:
             return 0.0
         if not self._measured:
             self.measure_noise()
-        U1 = np.array([self.energy(v, sigma) for v in self._measured])
-        U2 = np.array([self.twin.energy(v, sigma) for v in self._measured])
-        return twin_floor(U1, U2)
+        key = (sigma, self.twin, len(self._measured))      # the measured axes only grow
+        out = self._noise.get(key)
+        if out is None:
+            U1 = np.array([self.energy(v, sigma) for v in self._measured])
+            U2 = np.array([self.twin.energy(v, sigma) for v in self._measured])
+            out = self._noise[key] = twin_floor(U1, U2)
+        return out
 
     def seed(self, v: int, curve: GraspCurve) -> None:
         """Use an already traced ``curve`` for vertex ``v`` (e.g. the start axis)."""
         self._curves[v] = curve
+        self._energy_at.pop(v, None)
+        self._releases.clear()
+        self._noise.clear()
 
     def curve(self, v: int) -> GraspCurve:
         """The exact energy curve of vertex ``v`` (computed once)."""
@@ -227,10 +245,19 @@ class Landscape:
         Expanding grasps: an axis where the pads do not fit in the hole (or miss its
         centre) is out of reach — the hole's walls stop the pads — so its energy is ``inf``.
         """
-        c = self.curve(v)
-        if self.hole is not None and c.touch is None:
-            return math.inf
-        return c.energy_at(sigma)
+        f = self._energy_at.get(v)
+        if f is None:
+            c = self.curve(v)
+            f = _out_of_reach if self.hole is not None and c.touch is None else c.energy_at
+            self._energy_at[v] = f
+        return f(sigma)
+
+    def neighbours(self, v: int) -> list[int]:
+        """Grid neighbours of vertex ``v`` (:meth:`AxisGrid.neighbours`, cached)."""
+        out = self._nbrs.get(v)
+        if out is None:
+            out = self._nbrs[v] = self.grid.neighbours(v)
+        return out
 
     def release(self, start: int, sigma: float, noise: float = 0.0) -> Release:
         """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
@@ -239,8 +266,16 @@ class Landscape:
         larger are a tie. A start with zero energy holds nothing (``U_A = 0``, SPEC §7's
         released placement). The start must exceed no neighbour within it (else ``U_A = 0``),
         and a barrier within it of the start's energy is no barrier (``U_A = 0``).
+        Computed once per ``(start, sigma, noise)``.
         """
-        g = self.grid
+        key = (start, sigma, noise)
+        out = self._releases.get(key)
+        if out is None:
+            out = self._releases[key] = self._release(start, sigma, noise)
+        return out
+
+    def _release(self, start: int, sigma: float, noise: float) -> Release:
+        g, nbrs = self.grid, self.neighbours
         E: dict[int, float] = {}
 
         def U(v: int, near: int | None = None) -> float:
@@ -252,7 +287,7 @@ class Landscape:
         if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.start_neighbours(start)):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
-        esc = minimax_escape(start, g.neighbours, U)       # SPEC §4's exact equilibrium test
+        esc = minimax_escape(start, nbrs, U)       # SPEC §4's exact equilibrium test
         if esc.target is None:
             return Release(math.inf, True, None, [])
         b = esc.barrier
