@@ -69,8 +69,8 @@ def _axis(p, q) -> GraspAxis:
 
 def _optimize(part: dc.Part, at, radius: float, **extra) -> dict:
     """``optimize`` at its default settings (but a coarser landscape), the part given as
-    the bytes of its part file."""
-    params = {"at": tuple(f"{x},{y}" for x, y in at), "pad_radius": radius,
+    the bytes of its part file (SI), lengths here in mm."""
+    params = {"at": tuple(f"{x},{y}" for x, y in at), "pad_radius": radius, "units": "mm",
               "grid_angles": 24, "grid_offsets": 30, **extra}
     src = Source(f"{part.name}.json", json.dumps(part.to_dict()).encode())
     return reports.run("optimize", src, params).data
