@@ -171,12 +171,17 @@ class Landscape:
         curves are traced to it.
     hole : int, optional
         Expanding grasps: the hole the pads open in.
+    known : dict, optional
+        Curves already traced on this solver, grid spacing and ``sigma_end``, by vertex
+        (shared between landscapes of one level, :func:`~deformclosure.pads.refine.
+        solve_level`); curves traced here are added to it.
     """
 
     def __init__(self, solver: PadContact, pad: Pad, grid: AxisGrid, sigma_end: float,
-                 hole: int | None = None) -> None:
+                 hole: int | None = None, known: dict | None = None) -> None:
         self.solver, self.pad, self.grid, self.sigma_end = solver, pad, grid, sigma_end
         self.hole = hole
+        self._known: dict[int, GraspCurve] = {} if known is None else known
         self._curves: dict[int, GraspCurve] = {}
         self.twin: Landscape | None = None
         self._measured: list[int] = []
@@ -230,7 +235,10 @@ class Landscape:
         """The exact energy curve of vertex ``v`` (computed once)."""
         c = self._curves.get(v)
         if c is None:
-            c = self.solver.curve(self.grid.axis(v), self.pad, self.sigma_end, self.hole)
+            c = self._known.get(v)
+            if c is None:
+                c = self.solver.curve(self.grid.axis(v), self.pad, self.sigma_end, self.hole)
+                self._known[v] = c
             self._curves[v] = c
         return c
 

@@ -208,7 +208,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
                   twin: PadContact | None = None, hole: int | None = None,
                   twin_hole: int | None = None, n_angles: int = 48, n_offsets: int = 50,
                   n_samples: int = 48, n_curve: int = 120, noise: bool = True,
-                  saddles: tuple[int, list] | None = None) -> PadGraspResult:
+                  saddles: tuple[int, list] | None = None,
+                  known: tuple[dict, dict] | None = None) -> PadGraspResult:
     """Optimal separation ``σ* = argmax min(U_A, U_L)`` of a two-pad grasp on ``axis``.
 
     Parameters
@@ -237,6 +238,9 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         ``(factor, axes)``: refine the landscape grid ``factor`` times around these axes
         (:class:`~deformclosure.pads.saddle_grid.SaddleRefinedGrid`; the saddles of a
         coarser level).
+    known : (dict, dict), optional
+        Curves already traced on ``solver`` and on ``twin`` with this grid's spacing, by
+        vertex (re-solves of one level share them); updated in place.
 
     Returns
     -------
@@ -269,9 +273,10 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
     limit = pad_elastic_limit(solver, start_curve, e_L)
     sigma_L = limit.sigma_L
     land, start_axis = _landscape(solver, axis, pad, start_curve, sigma_L, hole, n_angles,
-                                  n_offsets, saddles)
+                                  n_offsets, saddles, None if known is None else known[0])
     grid, s, Us = land.grid, land.grid.vertex(0, 0), start_curve.energy_at
-    tau = _noise_floor(land, start_axis, twin, twin_hole) if noise else (lambda sig: 0.0)
+    tau = (_noise_floor(land, start_axis, twin, twin_hole, None if known is None else known[1])
+           if noise else (lambda sig: 0.0))
     U_sL = float(Us(sigma_L))
     sigma_star, e_star = _optimum(land, s, Us, U_sL, sigma_L, sigma0, tau, n_samples, noise)
     sig_n = sigma_star if sigma_star is not None else 0.5 * (sigma_L + sigma0)
@@ -301,7 +306,8 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
 
 def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: GraspCurve,
                sigma_L: float, hole: int | None, n_angles: int, n_offsets: int,
-               saddles: tuple[int, list] | None = None) -> tuple[Landscape, GraspAxis]:
+               saddles: tuple[int, list] | None = None, known: dict | None = None
+               ) -> tuple[Landscape, GraspAxis]:
     """The release landscape of ``axis`` traced to ``sigma_L`` (m), its start (vertex
     ``(0, 0)``) seeded with ``start_curve``, and the start axis re-anchored at the area
     centroid, so that the grid's wrap ``(θ + π, −c)`` is exact; refined around
@@ -310,7 +316,7 @@ def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: Grasp
     grid = AxisGrid.over_part(solver, start_axis, pad, n_angles, n_offsets)
     if saddles is not None and saddles[0] > 1 and saddles[1]:
         grid = SaddleRefinedGrid.around(grid, saddles[0], saddles[1])
-    land = Landscape(solver, pad, grid, sigma_L, hole)
+    land = Landscape(solver, pad, grid, sigma_L, hole, known)
     land.seed(grid.vertex(0, 0), start_curve)
     return land, start_axis
 
@@ -357,7 +363,7 @@ def _start_curve(solver: PadContact, ax0: GraspAxis, pad: Pad, hole: int | None)
 
 
 def _noise_floor(land: Landscape, start: GraspAxis, twin: PadContact | None,
-                 twin_hole: int | None):
+                 twin_hole: int | None, known: dict | None = None):
     """The relative noise floor ``tau(σ)`` of the landscape's start axis ``start``.
 
     Two views of the noise: the jitter under sub-cell moves of the start axis (the nodes'
@@ -368,7 +374,7 @@ def _noise_floor(land: Landscape, start: GraspAxis, twin: PadContact | None,
     jitter = jitter_noise(land.solver, land.pad, start, grid.d_offset, grid.d_angle,
                           land.sigma_end, hole=hole)
     if twin is not None and (hole is None or twin_hole is not None):
-        land.twin = Landscape(twin, land.pad, grid, land.sigma_end, twin_hole)
+        land.twin = Landscape(twin, land.pad, grid, land.sigma_end, twin_hole, known)
     return lambda sig: combined_floor(jitter(sig), land.noise(sig))
 
 

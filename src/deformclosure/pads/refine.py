@@ -355,10 +355,11 @@ def solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
     refined patch (at most ``most`` solves)."""
     tw = PadContact(twin_m) if twin_m is not None else None
     holes = {} if expanding_from is None else _holes(mesh, tw, expanding_from)
-    solver = None
+    solver, known = None, {}     # one factorisation; curves traced once per grid spacing
     for _ in range(most):
         refined = (2**k, list(saddles)) if k > 0 and saddles else None
         res = optimize_pads(mesh, axis, pad, solver=solver, twin=tw, saddles=refined,
+                            known=known.setdefault(1 if refined is None else 2**k, ({}, {})),
                             **holes, **options)
         solver = res.solver
         if res.saddle is None:
