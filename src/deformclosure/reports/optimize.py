@@ -110,11 +110,19 @@ def accuracy_request(p: dict, mesh_file: bool) -> tuple[float | None, int | None
 
 def refinement_warnings(res) -> list[str]:
     """Warnings of a refinement that stopped before its accuracy, or that has none."""
+    import math
+
     out = []
     if res.rtol is not None and not res.converged:
         why = f" ({res.stopped})" if res.stopped else ""
         out.append(f"not converged to --rtol {res.rtol:g}{why}: the verdict stands only if "
                    "its error bounds decide it; raise --max-seconds or --rtol")
+    fine, e = res.finest, res.error_estimate()["U_A"]
+    if e is not None and math.isfinite(fine.U_A) and fine.U_A > 0 \
+            and fine.U_A - e <= fine.noise < fine.U_A + e:
+        out.append(f"the verdict hangs on the noise floor: U_A = {fine.U_A:.3g} ± {e:.3g} J "
+                   f"straddles the floor {fine.noise:.3g} J (energy differences the mesh does "
+                   "not resolve); refine further (a smaller --rtol) to decide it")
     return out
 
 
