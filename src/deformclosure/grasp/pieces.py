@@ -396,4 +396,4 @@ def piece_candidates(a: float, b: float, w: int | None, kind: str, s: int,
     UA = Quadratic(0.5 * (kw - ks), ks * d, -0.5 * ks * d * d, xw)
     UL = Quadratic(-0.5 * ks, 0.0, C, xs)
     cand = max_min_candidates(UA, UL, a, b, difference=Quadratic(0.5 * kw, 0.0, -C, xw))
-    return np.unique(np.asarray(cand, dtype=float))
+    return np.asarray(sorted(set(cand)), dtype=float)

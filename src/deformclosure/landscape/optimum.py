@@ -44,15 +44,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
 __all__ = ["Quadratic", "Candidate", "max_min_candidates", "better", "maximise_quality"]
 
 
-@dataclass(frozen=True)
-class Quadratic:
+class Quadratic(NamedTuple):
     """``q(x) = a (x − x_ref)² + b (x − x_ref) + c`` (units of the curve, x in m).
 
     The reference ``x_ref`` is the caller's choice: one where the coefficients are
