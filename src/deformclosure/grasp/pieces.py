@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import GraspError
+from ..landscape.optimum import Quadratic, max_min_candidates
 
 __all__ = [
     "RTOL",
@@ -376,22 +377,23 @@ def piece_candidates(a: float, b: float, w: int | None, kind: str, s: int,
                      x0: np.ndarray, k: np.ndarray, C: float) -> np.ndarray:
     """Points of ``[a, b]`` where ``Q = min(U_A, U_L)`` of a piece can be largest.
 
-    With ``U_A = E_w − E_s`` and ``U_L = C − E_s``, ``Q = min(E_w, C) − E_s``; the
-    maximum of the minimum of two quadratics on an interval lies at an end, at a
-    stationary point of one of them where it is the smaller, or where they are equal
-    (paper §4.6).  The candidates are therefore the ends, the stationary point of
-    ``E_w − E_s`` (``k_w(x0_w − x) = k_s(x0_s − x)``), the stationary point of
-    ``U_L`` (``x0_s``, the end of the range) and the point where ``E_w = C``
-    (``x = x0_w − sqrt(2C/k_w)``).  Returned sorted, ends included.
+    Only a ``"finite"`` piece has interior candidates (``Q ≡ 0`` on a ``"zero"`` piece;
+    ``Q = U_L`` increases on an ``"inf"`` one). There ``U_A = E_w − E_s`` and
+    ``U_L = C − E_s`` are both active quadratics (``E_w > E_s > 0`` on the piece), and
+    the one maximiser of the minimum of two quadratics,
+    :func:`deformclosure.landscape.optimum.max_min_candidates` (paper §4.6), is given
+    them in the forms this model knows exactly: ``U_A`` about ``x0_w``, ``U_L`` about
+    ``x0_s`` (its top, the end of the range, so never an interior candidate) and the
+    crossing ``U_A − U_L = E_w − C = ½ k_w (x − x0_w)² − C`` without cancellation (roots
+    ``x0_w ∓ sqrt(2C/k_w)``). The candidates are the ends, the stationary point of
+    ``E_w − E_s`` where it is concave (``k_w < k_s``), and the point ``E_w = C``.
+    Returned sorted, ends included.
     """
-    cand = [a, b]
-    if kind == "finite":
-        dk = k[w] - k[s]
-        if dk != 0.0:
-            y = k[s] * (x0[s] - x0[w]) / dk
-            cand.append(x0[w] - y)
-        if C > 0.0:
-            cand.append(x0[w] - np.sqrt(2.0 * C / k[w]))
-    cand = np.asarray(cand, dtype=float)
-    cand = cand[np.isfinite(cand) & (cand >= a) & (cand <= b)]
-    return np.unique(cand)
+    if kind != "finite" or not b > a:
+        return np.unique(np.asarray([a, b], dtype=float))
+    kw, ks, xw, xs = float(k[w]), float(k[s]), float(x0[w]), float(x0[s])
+    d = xs - xw
+    UA = Quadratic(0.5 * (kw - ks), ks * d, -0.5 * ks * d * d, xw)
+    UL = Quadratic(-0.5 * ks, 0.0, C, xs)
+    cand = max_min_candidates(UA, UL, a, b, difference=Quadratic(0.5 * kw, 0.0, -C, xw))
+    return np.asarray(sorted(set(cand)), dtype=float)

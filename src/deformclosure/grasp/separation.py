@@ -25,7 +25,8 @@ Conventions fixed here (SPEC §4 is silent on them)
   attained, or the breakpoint it is approached at, with ``attained=False``.  ``U_A`` and
   ``U_L`` are then the one-sided limits that define the supremum.
 * **Ties** of the maximum value (exactly equal ``Q``) prefer an attained value, then
-  the least squeeze (the separation closest to ``σ0_s``).
+  the least squeeze (the separation closest to ``σ0_s``)
+  (:func:`deformclosure.landscape.optimum.better`).
 * **Evaluation at breakpoints** is by definition, at the exact tie: the two (or more)
   curves known to cross there are set equal, and a kink's energy to 0, before calling
   ``release_energy``; they differ from that only by rounding (see
@@ -52,6 +53,19 @@ Per piece, ``Q = min(U_w, C) − U_s`` with ``C = U_s(σ_L)``; its maximum lies 
 piece end (a one-sided limit), at the stationary point of ``U_w − U_s``, or where
 ``U_w = C`` (:func:`~deformclosure.grasp.pieces.piece_candidates`).
 
+What is shared and what is this module's own
+--------------------------------------------
+The maximisation of the minimum of two quadratics on a piece and the ranking of
+candidates (the tie rules above) are the one σ*-search mechanics of
+:mod:`deformclosure.landscape.optimum` (``max_min_candidates``, ``Candidate``,
+``better``), which the pads' lazy search uses too. What stays here is specific to the
+paper's closed-form curves and cannot move without changing results: the §4 event table
+(adjacent crossings, tie-creating kinks, the saddle's crossings; :func:`_sweep_exact`,
+:func:`_sweep_paper`) that fixes every piece before any maximisation, ``U_A`` at a
+candidate by its closed form (:func:`~deformclosure.grasp.pieces.piece_quality`), the
+one-sided limits at jumps as candidates with ``attained=False`` and the jump report,
+and the §4.7 ε-grid (:func:`_approx`), whose samples are ranked by the same rule.
+
 References
 ----------
 K. Gopalakrishnan and K. Goldberg, "D-Space and Deform Closure Grasps of Deformable
@@ -71,6 +85,7 @@ import numpy as np
 
 from ..choices import METHODS, MODES, choose
 from ..errors import GraspError
+from ..landscape.optimum import Candidate, better
 from . import pieces as pc
 from .release import release_energy
 
@@ -603,25 +618,13 @@ def _sweep_paper(P: _Problem, max_breakpoints: int):
 
 
 @dataclass
-class _Cand:
-    Q: float
-    x: float
-    attained: bool
+class _Cand(Candidate):
+    """A :class:`~deformclosure.landscape.optimum.Candidate` with what the report needs."""
+
     UA: float
     UL: float
     release: Any
     w: int | None
-
-
-def _better(c: _Cand, best: _Cand | None) -> bool:
-    """Larger Q; on exact ties an attained value, then the least squeeze (larger x)."""
-    if best is None or c.Q > best.Q:
-        return True
-    if c.Q < best.Q:
-        return False
-    if c.attained != best.attained:
-        return c.attained
-    return c.x > best.x
 
 
 def _maximise(P: _Problem, bps, evals, pieces) -> tuple[_Cand | None, list]:
@@ -636,7 +639,7 @@ def _maximise(P: _Problem, bps, evals, pieces) -> tuple[_Cand | None, list]:
     best: _Cand | None = None
     for e in evals:
         c = _Cand(e.Q, e.x, True, e.UA, e.UL, e.release, e.w)
-        if _better(c, best):
+        if better(c, best):  # contracting frame: σ0 is the upper end
             best = c
     limits = []  # per piece: (U_A at a+, U_A at b-)
     for i, p in enumerate(pieces):
@@ -653,7 +656,7 @@ def _maximise(P: _Problem, bps, evals, pieces) -> tuple[_Cand | None, list]:
                 c = _Cand(float(Q[j]), float(x), False, float(UA[j]), float(UL[j]), p.release, p.w)
             else:
                 c = _Cand(float(Q[j]), float(x), True, float(UA[j]), float(UL[j]), p.release, p.w)
-            if _better(c, best):
+            if better(c, best):  # contracting frame: σ0 is the upper end
                 best = c
     # Jumps of U_A at interior breakpoints (x order; converted to σ order by the caller).
     jumps = []
@@ -870,7 +873,7 @@ def _solve(P: _Problem, method: str, eps: float | None, lipschitz: float | None,
         best = None
         for e in evals:
             c = _Cand(e.Q, e.x, True, e.UA, e.UL, e.release, e.w)
-            if _better(c, best):
+            if better(c, best):  # contracting frame: σ0 is the upper end
                 best = c
         # n_breakpoints: those that split the grid; n_pieces: interior samples
         return _Solution(best, [], n_static, len(evals) - len(ends),

@@ -1,17 +1,40 @@
-"""The one σ*-search over piecewise-quadratic energy curves (SPEC §4, §6):
+"""The one σ*-search over piecewise-quadratic or sampled energy curves (SPEC §4, §6):
 ``σ* = argmax Q(σ)``, ``Q = min(U_A, U_L)`` on ``[σ_L, σ0]``.
 
-Every vertex energy of a landscape whose vertices are traced exactly in σ is a piecewise
-quadratic, so between two separations where the escape runs over the same saddle vertex
-``w`` (and the start stays a strict minimum), ``U_A = U_w − U_s`` is piecewise quadratic
-with the kinks of ``U_w`` and ``U_s``, and so is ``U_L = U_s(σ_L) − U_s``; on each such
-piece ``Q`` is maximised in closed form (ends, stationary points, crossings of ``U_A``
-with ``U_L``) and every candidate is checked against ``U_A`` evaluated by its definition.
-Where the saddle or the class of the release changes, the interval is bisected to
-``1e-7 σ0``; ``U_A`` can jump there. This is §4's exact algorithm for curves with several
-pieces; the paper model keeps its own sweep over §4's breakpoints
-(:mod:`deformclosure.grasp.separation`), which the SPEC fixes, with closed-form vertex
-energies ``½ k (σ0 − σ)²`` and the paper's method as a reference.
+Two pieces of it are the same for every model and live here once, free of coordinates:
+
+* :func:`max_min_candidates` — where ``min(f, g)`` of two quadratics can be largest on
+  an interval: the ends, the stationary point of a concave one, and the crossings
+  ``f = g`` (SPEC §4, paper §4.6). A model turns its curves into coefficients
+  (:class:`Quadratic`) and evaluates ``Q`` at the candidates its own way.
+* :func:`better` — the ranking of candidates ``(Q, σ)``: the larger ``Q``; on exact ties
+  an attained value before a one-sided limit, then the least squeeze (the separation
+  nearest ``σ0``). A sampled search (the paper's §4.7 grid, the lazy samples below)
+  ranks its samples with it too.
+
+What stays with each caller is *where the pieces are*:
+
+* the paper model (:mod:`deformclosure.grasp.separation`) sweeps the events of SPEC §4
+  — crossings of adjacent vertex curves, tie-creating kinks and crossings of the
+  saddle's curve — over closed-form vertex energies ``½ k (σ0 − σ)²``; its pieces are
+  known exactly before any maximisation, ``U_A`` is evaluated there by its closed form
+  (the one-sided limits at jumps are candidates with ``attained=False``), and its §4.7
+  ε-grid is a sampling rule with a guarantee of its own;
+* :func:`maximise_quality` (pads, §6) knows only a lazy ``evaluate(σ)`` and vertex
+  energy curves as callables with their kinks: it samples, probes the intervals next to
+  kinks, bisects where the saddle or class of the release changes, fits the quadratics
+  through three points of each piece (:meth:`Quadratic.through`), and checks every
+  candidate against ``U_A`` evaluated by its definition (a failed check splits the
+  interval).
+
+:func:`maximise_quality` in detail: every vertex energy of a landscape whose vertices
+are traced exactly in σ is a piecewise quadratic, so between two separations where the
+escape runs over the same saddle vertex ``w`` (and the start stays a strict minimum),
+``U_A = U_w − U_s`` is piecewise quadratic with the kinks of ``U_w`` and ``U_s``, and so
+is ``U_L = U_s(σ_L) − U_s``; on each such piece ``Q`` is maximised in closed form and
+every candidate is checked against ``U_A`` evaluated by its definition. Where the saddle
+or the class of the release changes, the interval is bisected to ``1e-7 σ0``; ``U_A``
+can jump there.
 
 The search knows nothing of coordinates: a model gives it an evaluation of the release at
 one σ and the energy curves of the start and of a saddle vertex.
@@ -19,37 +42,140 @@ one σ and the energy curves of the start and of a saddle vertex.
 
 from __future__ import annotations
 
-from typing import Any, Callable
+import math
+from dataclasses import dataclass
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
-__all__ = ["maximise_quality"]
+__all__ = ["Quadratic", "Candidate", "max_min_candidates", "better", "maximise_quality"]
 
 
-def _quadratic(f, lo: float, hi: float) -> np.ndarray:
-    """Coefficients ``[a, b, c]`` of the quadratic through ``f`` at lo, mid, hi, in ``x − lo``."""
-    h = hi - lo
-    f0, f1, f2 = f(lo), f(lo + 0.5 * h), f(hi)
-    return np.array([2.0 * (f2 - 2.0 * f1 + f0) / h**2, (4.0 * f1 - f2 - 3.0 * f0) / h, f0])
+class Quadratic(NamedTuple):
+    """``q(x) = a (x − x_ref)² + b (x − x_ref) + c`` (units of the curve, x in m).
+
+    The reference ``x_ref`` is the caller's choice: one where the coefficients are
+    formed without cancellation (e.g. a kink of a vertex curve) keeps the candidates of
+    :func:`max_min_candidates` accurate.
+    """
+
+    a: float
+    b: float
+    c: float
+    x_ref: float = 0.0
+
+    @classmethod
+    def through(cls, f: Callable[[float], float], lo: float, hi: float) -> Quadratic:
+        """The quadratic through ``f`` at ``lo``, the middle and ``hi`` (``x_ref = lo``)."""
+        h = hi - lo
+        f0, f1, f2 = f(lo), f(lo + 0.5 * h), f(hi)
+        return cls(2.0 * (f2 - 2.0 * f1 + f0) / h**2, (4.0 * f1 - f2 - 3.0 * f0) / h, f0, lo)
+
+    def shifted(self, x_ref: float) -> Quadratic:
+        """The same polynomial about another reference."""
+        d = x_ref - self.x_ref
+        if d == 0.0:
+            return self
+        return Quadratic(self.a, 2.0 * self.a * d + self.b, (self.a * d + self.b) * d + self.c,
+                         x_ref)
+
+    def __call__(self, x):
+        t = np.asarray(x, dtype=float) - self.x_ref
+        return (self.a * t + self.b) * t + self.c
 
 
-def _quadratic_max_min(fa, fb, lo: float, hi: float) -> list[float]:
-    """Candidates for ``argmax min(fa, fb)`` on ``[lo, hi]``; fa, fb exact quadratics there."""
+def _real_roots(a: float, b: float, c: float, im_tol: float) -> list[float]:
+    """Real roots of ``a t² + b t + c`` (stable formula); a complex pair whose imaginary
+    part is at most ``im_tol`` (a tangency blurred by rounding) counts as its real part."""
+    if a == 0.0:
+        return [] if b == 0.0 else [-c / b]
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return [-b / (2.0 * a)] if math.sqrt(-disc) / (2.0 * abs(a)) <= im_tol else []
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    return [q / a] if q == 0.0 else [q / a, c / q]
+
+
+def max_min_candidates(f: Quadratic, g: Quadratic, lo: float, hi: float,
+                       difference: Quadratic | None = None) -> list[float]:
+    """Points of ``[lo, hi]`` where ``min(f, g)`` of two quadratics can be largest.
+
+    At an interior maximum ``x*`` either ``f(x*) ≠ g(x*)`` — then the smaller one is
+    locally the minimum, so ``x*`` is its stationary point and it is concave there — or
+    ``f(x*) = g(x*)``. The candidates are therefore the ends, the stationary points of
+    the concave ones strictly inside, and the crossings strictly inside (a double root
+    blurred into a complex pair by less than ``1e-12 (hi − lo)`` included).
+
+    Parameters
+    ----------
+    f, g : Quadratic
+        The two curves, exact quadratics on ``[lo, hi]``.
+    lo, hi : float
+        The interval (m), ``lo ≤ hi``.
+    difference : Quadratic, optional
+        ``f − g`` when the caller can form it without cancellation (the paper model's
+        ``U_A − U_L = E_w − C``); by default the difference of the coefficients, about
+        ``f.x_ref``.
+
+    Returns
+    -------
+    list of float
+        ``[lo, hi]``, then the stationary points of ``f`` and ``g``, then the crossings
+        in increasing order (not deduplicated beyond that).
+
+    Examples
+    --------
+    ``f = 1 − x²`` and ``g = x`` on ``[−2, 2]``: the top of ``f`` at 0 and the crossings
+    ``x = (−1 ± √5)/2``:
+
+    >>> [round(x, 12) for x in max_min_candidates(Quadratic(-1, 0, 1), Quadratic(0, 1, 0),
+    ...                                           -2.0, 2.0)]
+    [-2.0, 2.0, 0.0, -1.61803398875, 0.61803398875]
+    """
     out = [lo, hi]
-    if hi - lo <= 0:
+    h = hi - lo
+    if h <= 0:
         return out
-    coefs = [_quadratic(f, lo, hi) for f in (fa, fb)]
-    for a, b, _ in coefs:
-        if a < 0:
-            x = lo - b / (2 * a)
+    for q in (f, g):
+        if q.a < 0:
+            x = q.x_ref - q.b / (2.0 * q.a)
             if lo < x < hi:
                 out.append(float(x))
-    diff = coefs[0] - coefs[1]
-    if np.any(diff):
-        for r in np.roots(diff):
-            if abs(r.imag) <= 1e-12 * (hi - lo) and 0 < r.real < hi - lo:
-                out.append(float(lo + r.real))
+    if difference is None:
+        gf = g.shifted(f.x_ref)
+        difference = Quadratic(f.a - gf.a, f.b - gf.b, f.c - gf.c, f.x_ref)
+    d = difference
+    if d.a or d.b or d.c:
+        for t in sorted(_real_roots(d.a, d.b, d.c, 1e-12 * h)):
+            x = d.x_ref + t
+            if lo < x < hi:
+                out.append(float(x))
     return out
+
+
+@dataclass
+class Candidate:
+    """A candidate for σ*: the quality ``Q`` (J) at ``x`` (m), and whether it is attained
+    there (False: a one-sided limit at a jump of ``U_A``)."""
+
+    Q: float
+    x: float
+    attained: bool
+
+
+def better(c: Candidate, best: Candidate | None, toward: float = 1.0) -> bool:
+    """Whether ``c`` ranks above ``best`` (``None``: nothing yet).
+
+    The larger ``Q``; on exact ties an attained value, then the least squeeze: the
+    larger ``toward · x`` (``toward = +1`` when ``σ0`` is the upper end of the range).
+    """
+    if best is None or c.Q > best.Q:
+        return True
+    if c.Q < best.Q:
+        return False
+    if c.attained != best.attained:
+        return c.attained
+    return toward * c.x > toward * best.x
 
 
 def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[float], float],
@@ -120,14 +246,14 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
     lo, hi = min(sigma_L, sigma0), max(sigma_L, sigma0)
     xs = sorted(set(np.linspace(lo, hi, n_samples).tolist())
                 | set(k for k in kinks.tolist() if lo < k < hi))
-    best: tuple[float, float] | None = None   # (Q, σ)
+    best: Candidate | None = None
     closer = 1.0 if sigma0 >= sigma_L else -1.0  # on ties, the least squeeze (nearer σ0)
 
     def consider(sig: float, Q: float) -> None:
         nonlocal best
-        if Q > 0 and (best is None or Q > best[0]
-                      or (Q == best[0] and closer * sig > closer * best[1])):
-            best = (Q, sig)
+        c = Candidate(Q, sig, True)
+        if Q > 0 and better(c, best, closer):
+            best = c
 
     for x in xs:
         consider(x, ev(x).Q)
@@ -166,9 +292,14 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
         cuts = np.unique(np.concatenate([[a, b], cuts[(cuts > a) & (cuts < b)]]))
         for lo, hi in zip(cuts[:-1], cuts[1:]):
             split = False
-            for x in _quadratic_max_min(UA, UL, lo, hi):
+            if hi - lo <= 0:
+                xc = [lo, hi]
+            else:
+                xc = max_min_candidates(Quadratic.through(UA, lo, hi),
+                                        Quadratic.through(UL, lo, hi), lo, hi)
+            for x in xc:
                 Qp = min(UA(x), UL(x))
-                if best is not None and Qp <= best[0]:
+                if best is not None and Qp <= best.Q:
                     continue
                 e = ev(x)
                 if e.key == ea.key and abs(e.Q - Qp) <= 1e-9 * max(abs(Qp), 1e-300):
@@ -179,4 +310,4 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
                     break
             if split:
                 break
-    return best, ev
+    return (None if best is None else (best.Q, best.x)), ev
