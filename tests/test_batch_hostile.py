@@ -509,7 +509,8 @@ def _group_alive(pgid: int) -> bool:
 def _slow_jobs(d: Path, n: int) -> Path:
     shutil.copy(EXAMPLES / "rectangle.json", d / "rectangle.json")
     entries = [{"part": "rectangle.json", "command": "optimize",
-                "options": ["--model", "paper", "--at", f"0,{3 + i * 1.5:g}", f"12,{3 + i * 1.5:g}"]}
+                "options": ["--model", "paper", "--at", f"0,{3 + i * 1.5:g}", f"12,{3 + i * 1.5:g}",
+                            "--max-area", "0.1"]}       # ~1 s each: Ctrl-C lands mid-batch
                for i in range(n)]
     (d / "jobs.json").write_text(json.dumps(entries))
     return d / "jobs.json"
