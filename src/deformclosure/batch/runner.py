@@ -313,6 +313,14 @@ def _drive(submit: Callable, wait_first: Callable, capacity: int, todo: deque, r
                 inflight[submit(worker.payload(job, version))] = job
             except worker.JobFailed as err:
                 record(job, worker.failed(str(err)))
+            except BrokenProcessPool:
+                # a worker died after the last wait: the pool refuses new jobs. Put this
+                # one back, settle those in flight (the lost ones alone) on a new pool.
+                todo.appendleft(job)
+                if rerun_alone is None:
+                    raise
+                rerun_alone([], inflight, record, version)
+                inflight.clear()
         if not inflight:
             continue
         lost = []
