@@ -509,7 +509,8 @@ def _group_alive(pgid: int) -> bool:
 def _slow_jobs(d: Path, n: int) -> Path:
     shutil.copy(EXAMPLES / "rectangle.json", d / "rectangle.json")
     entries = [{"part": "rectangle.json", "command": "optimize",
-                "options": ["--model", "paper", "--at", f"0,{3 + i * 1.5:g}", f"12,{3 + i * 1.5:g}",
+                "options": ["--model", "paper", "--at", f"0,{3 + (i % 12) * 1.5:g}",
+                            f"12,{3 + (i % 12) * 1.5 + (i // 12) * 0.25:g}",
                             "--max-area", "0.1"]}       # ~1 s each: Ctrl-C lands mid-batch
                for i in range(n)]
     (d / "jobs.json").write_text(json.dumps(entries))
@@ -521,7 +522,8 @@ def _slow_jobs(d: Path, n: int) -> Path:
 def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
     """Ctrl-C of a batch on worker processes: one line, exit 130, the workers gone, and
     no folder of ours in the temporary folder (workers get bytes, not copies)."""
-    jobs = _slow_jobs(tmp_path, 12)
+    n_jobs = 40       # far more than finish between the first result and the interrupt
+    jobs = _slow_jobs(tmp_path, n_jobs)
     db = tmp_path / "r.sqlite"
     tmp = tmp_path / "tmp"
     tmp.mkdir()
@@ -556,7 +558,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
     assert lines[0].startswith("interrupted; ") and "finished" in lines[0] \
         and "run the same command to resume" in lines[0]
     n_kept = len(read_results(db))
-    assert 1 <= n_kept < 12 and f"interrupted; {n_kept} job" in lines[0]
+    assert 1 <= n_kept < n_jobs and f"interrupted; {n_kept} job" in lines[0]
     assert not list(tmp.glob("deformclosure-*"))
 
 
