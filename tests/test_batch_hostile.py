@@ -507,11 +507,12 @@ def _group_alive(pgid: int) -> bool:
 
 
 def _slow_jobs(d: Path, n: int) -> Path:
+    """``n`` (at most 99) distinct paper-model jobs of about 2 s each: together longer than
+    the test waits for a first result (90 s), so the interrupt always lands mid-batch."""
     shutil.copy(EXAMPLES / "rectangle.json", d / "rectangle.json")
     entries = [{"part": "rectangle.json", "command": "optimize",
-                "options": ["--model", "paper", "--at", f"0,{3 + (i % 12) * 1.5:g}",
-                            f"12,{3 + (i % 12) * 1.5 + (i // 12) * 0.25:g}",
-                            "--max-area", "0.1"]}       # ~1 s each: Ctrl-C lands mid-batch
+                "options": ["--model", "paper", "--at", f"0,{3 + (i % 11) * 1.5:g}",
+                            f"12,{3 + (i % 11) * 1.5 + (i // 11) * 0.2:g}", "--max-area", "0.02"]}
                for i in range(n)]
     (d / "jobs.json").write_text(json.dumps(entries))
     return d / "jobs.json"
@@ -522,7 +523,7 @@ def _slow_jobs(d: Path, n: int) -> Path:
 def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
     """Ctrl-C of a batch on worker processes: one line, exit 130, the workers gone, and
     no folder of ours in the temporary folder (workers get bytes, not copies)."""
-    n_jobs = 40       # far more than finish between the first result and the interrupt
+    n_jobs = 96       # ~100 s of work on 2 workers: never done before the interrupt
     jobs = _slow_jobs(tmp_path, n_jobs)
     db = tmp_path / "r.sqlite"
     tmp = tmp_path / "tmp"
