@@ -506,6 +506,13 @@ def _group_alive(pgid: int) -> bool:
     return False
 
 
+def _default_sigint() -> None:
+    """In the child: Ctrl-C's default action, as from a terminal. A child inherits an
+    ignored SIGINT, and a test process can have one (a worker initialiser run in-process
+    ignores it): the batch then never saw the interrupt (exit 0, or a 60 s hang)."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def _slow_jobs(d: Path, n: int) -> Path:
     """``n`` (at most 99) distinct paper-model jobs of about 2 s each: together longer than
     the test waits for a first result (90 s), so the interrupt always lands mid-batch."""
@@ -532,7 +539,7 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_no_temporary_folder(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "deformclosure", "batch", str(jobs), "-o",
                              str(db), "--workers", "2", "--quiet"], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_default_sigint)
     try:
         deadline, n_done = time.monotonic() + 90, 0
         while time.monotonic() < deadline and proc.poll() is None:
