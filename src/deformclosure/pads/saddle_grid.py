@@ -148,24 +148,20 @@ class SaddleRefinedGrid:
 
     def neighbours(self, v: int) -> list[int]:
         """Fine neighbours inside a patch, coarse ones across (module docstring)."""
-        f, out = self.factor, []
+        out = []
         inside = v in self.patch
         if inside:
             out.extend(w for w in self.fine.neighbours(v) if w in self.patch)
         if self.is_coarse(v):
-            i, j = self.fine.cell(v)
-            for di, dj in ((f, 0), (-f, 0), (0, f), (0, -f)):
-                w = self._cell_vertex(i + di, j + dj)
-                if w is None or (inside and w in self.patch):
-                    continue
-                out.append(w)
+            out.extend(w for w in self.start_neighbours(v)
+                       if not (inside and w in self.patch))
         return out
 
     def start_neighbours(self, v: int) -> list[int]:
         """The coarse neighbours of ``v``: the start's strictness test (module docstring)."""
         f, out = self.factor, []
         i, j = self.fine.cell(v)
-        for di, dj in ((0, -f), (0, f), (-f, 0), (f, 0)):
+        for di, dj in ((f, 0), (-f, 0), (0, f), (0, -f)):
             w = self._cell_vertex(i + di, j + dj)
             if w is not None:
                 out.append(w)
