@@ -413,12 +413,15 @@ def _independent(name):
     return rigid_verdict(rigid_contacts(outer, fingers))
 
 
-def check_report(name):
+def check_report(name, **params):
+    """``check`` on the case's mesh (``refine=1``: Thm 1 is a fact of every mesh), or with
+    ``params`` (e.g. ``rtol``)."""
+    params = params or {"refine": 1}
     outer, fingers, area = CASES[name]
     part = Source(f"{name}.json", json.dumps({"name": "t1", "units": "mm", "outer": outer, "material": RUBBER,
                                               "mesh": {"max_area": area, "min_angle": 25}}).encode())
     fsrc = Source("fingers.json", json.dumps({"units": "mm", "fingers": fingers}).encode())
-    return reports.run("check", part, {"fingers": fsrc})
+    return reports.run("check", part, {"fingers": fsrc, **params})
 
 
 def test_catalogue_covers_both_verdicts_and_orders():
@@ -482,6 +485,18 @@ def test_check_at_rest_is_theorem1(name):
     unresolved = (d["release"]["closure_rule"] == "thm1_at_rest" and not d["U_A_infinite"]
                   and d["U_A"] <= d["U_A_error"])
     assert any("within its error estimate" in w for w in rep.warnings) == unresolved
+
+
+@pytest.mark.parametrize("name", ["star, 2 notch points", "block, 4 mid-side points",
+                                  "block, 3 mid-side points", "star, 5 points in the notches"])
+def test_at_rest_every_level_of_the_default_refinement_is_theorem1(name):
+    """At the default ``--rtol`` every mesh level's deform verdict is the rigid one (a
+    level's twin realisation is meshed as finely as the level: a coarse twin once zeroed
+    the barrier of a form-closed set on the finer levels)."""
+    closed, _ = _independent(name)
+    d = check_report(name, rtol=0.05).data
+    assert len(d["convergence"]) >= 2
+    assert [row["deform_closure"] for row in d["convergence"]] == [closed] * len(d["convergence"])
 
 
 def _assert_consistent(d, text):

@@ -693,8 +693,12 @@ def _least_deep_edge(geo: _EdgeGeometry, f: Finger, s: np.ndarray, gl: np.ndarra
     """Among the edges within twice ``dmin`` of a point inside the part (foot on the edge,
     the point on their inner side) the one the finger crosses least deeply — for a
     polygon the depth of the whole polygon past the edge's line — ties to the edge whose
-    line is nearer; ``-1`` when there is none."""
-    cand = np.flatnonzero((s >= 0) & (s <= 1) & (gl < 0) & (-gl <= 2.0 * dmin + 1e-12 * np.sqrt(geo.ell2)))
+    line is nearer; ``-1`` when there is none. The point on an edge up to round-off counts
+    as on its inner side."""
+    # a corner on the boundary up to round-off (``dmin`` ~ 0: inside or not by a bit)
+    # still presses the edges through it
+    eps = 1e-12 * np.sqrt(geo.ell2)
+    cand = np.flatnonzero((s >= 0) & (s <= 1) & (gl < eps) & (-gl <= 2.0 * dmin + eps))
     if not len(cand):
         return -1
     dep = -gl[cand] + off

@@ -454,7 +454,8 @@ def _nearest_edge(t, vs, ve, pv, part, wx, wy, off, dmin):  # pragma: no cover -
         ax, ay, ex, ey, s, gl = _foot(part, e, wx, wy)
         if s < 0.0 or s > 1.0:
             continue
-        if gl >= 0 or -gl > 2.0 * dmin + 1e-12 * np.sqrt(el2[e]):
+        eps = 1e-12 * np.sqrt(el2[e])      # on the edge up to round-off counts (a corner
+        if gl >= eps or -gl > 2.0 * dmin + eps:  # on the boundary is inside or not by a bit)
             continue
         dep = -gl + off
         if t == _POLYGON:

@@ -52,6 +52,10 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     p = params
     _check_params(p)
     check_accuracy(p.get("rtol"), p.get("max_seconds"))
+    refine = p.get("refine")
+    if refine is not None and (isinstance(refine, bool) or not (isinstance(refine, int)
+                                                                and 1 <= refine <= 5)):
+        raise DeformClosureError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
     fsrc = source_of(p["fingers"], "finger file")
     fingers = load_fingers(fsrc)
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
@@ -59,38 +63,49 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     inp.sources.insert(1, fsrc)
     check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")
 
-    def solve(mesh):
+    def solve(mesh, part=inp.part):
+        # ``part``: the geometry of the twin realisation (noise floor), meshed as finely
+        # as ``mesh`` — a coarse twin would measure the coarse mesh's noise
         res = deform_closure(mesh, fingers)
-        rel = release_energy_fingers(mesh, fingers, part=inp.part, start=res.equilibrium,
+        rel = release_energy_fingers(mesh, fingers, part=part, start=res.equilibrium,
                                      rigid_closed=res.deform_closure,
                                      n_translation=p["grid_steps"], levels=p["saddle_levels"],
                                      count=None if progress is None else lambda n: progress(n, None))
         return res, rel
 
-    rtol = p.get("rtol")
-    if rtol is not None and inp.part is None:
-        raise DeformClosureError("--rtol: needs a part file (a mesh file cannot be re-meshed); "
-                                 "give the part, or drop --rtol to solve the mesh once")
-    levels = (_refined(inp, fingers, solve, rtol, p.get("max_seconds"), notify)
-              if rtol is not None else [(inp.mesh, *solve(inp.mesh))])
-    mesh, res, rel = levels[-1]
+    from .optimize import accuracy_request
+
+    # SPEC §6 "Accuracy by default": --rtol 0.05 unless --refine N is given; a mesh file
+    # cannot be re-meshed, so it is solved once (with a warning)
+    rtol, refine, acc_warnings = accuracy_request(p, inp.part is None)
+    if rtol is None and (refine or 1) <= 1:
+        levels = [(inp.mesh, *solve(inp.mesh))]
+    else:
+        levels = _refined(inp, fingers, solve, rtol, refine, p.get("max_seconds"), notify)
+    mesh, res, rel = levels[-1][:3]
     inp.mesh = mesh
     data = {**merge_release(res.to_dict(), res, rel), "provenance": provenance(inp.sources)}
     lines, warnings = _lines(mesh, fingers, res, rel)
-    if rtol is not None:
-        more_lines, more = _refinement_lines(data, levels, rtol, p.get("max_seconds"))
+    if len(levels) > 1 or rtol is not None:
+        more_lines, more = _refinement_lines(data, levels, rtol)
         lines += more_lines
         warnings += more
-    return Report("check", data, lines, inp.warnings + warnings, p, (res, rel, fingers, inp),
+    return Report("check", data, lines, inp.warnings + acc_warnings + warnings, p,
+                  (res, rel, fingers, inp),
                   _writer)
 
 
-def _refined(inp, fingers, solve, rtol: float, max_seconds: float | None, notify) -> list:
-    """``(mesh, closure, release)`` on meshes with ``h`` halved per level until the release
-    energy's estimate — the change between the last levels (:func:`~deformclosure.pads.
-    refine.level_error`) plus the placements lattice's own — is within ``rtol`` of it, or the
-    budget (``max_seconds``, the memory limits) ends it (SPEC §6 "Accuracy by default")."""
+def _refined(inp, fingers, solve, rtol: float | None, refine: int | None,
+             max_seconds: float | None, notify) -> list:
+    """``(mesh, closure, release[, why stopped])`` on meshes with ``h`` halved per level:
+    ``refine`` levels, or — with ``rtol`` — until the estimates of U_A and of the quality
+    (:func:`_check_error`) are within ``rtol`` of them, the start shows no barrier on two
+    levels in a row, or the budget (``max_seconds``, the memory limits) ends it (SPEC §6
+    "Accuracy by default"). Point fingers that press the part stop it after two levels:
+    their energies follow the mesh (a point force in 2-D has no finite stiffness), so no
+    level converges."""
     import time
+    from dataclasses import replace
 
     from ..mesh import mesh_part
     from ..mesh.generate import default_max_area
@@ -98,34 +113,62 @@ def _refined(inp, fingers, solve, rtol: float, max_seconds: float | None, notify
     from ..pads.size_limits import check_pads_size
 
     budget = DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds)
+    n_levels = MAX_LEVELS if refine is None else int(refine)
     base = default_max_area(inp.part)
     pts = contact_points(inp.part, fingers)
     t_start, levels, seconds = time.perf_counter(), [], []
-    for k in range(MAX_LEVELS):
+    for k in range(n_levels):
         t0 = time.perf_counter()
+        level_part = replace(inp.part, mesh_options=replace(inp.part.mesh_options,
+                                                            max_area=base / 4.0**k))
         if k == 0:
             mesh = inp.mesh
         else:
             if notify is not None:
-                notify(f"level {k + 1} ...")
+                notify(f"level {k + 1} ..." if rtol is not None else f"mesh {k + 1} of {n_levels} ...")
             try:
                 mesh = mesh_part(inp.part, max_area=base / 4.0**k, points=pts)
                 check_pads_size(mesh, solvers=3, what="check")
             except DeformClosureError as err:
                 levels[-1] += (f"memory or size limit at level {k + 1}: {err}",)
                 return levels
-        levels.append((mesh, *solve(mesh)))
+        levels.append((mesh, *solve(mesh, level_part)))
         seconds.append(time.perf_counter() - t0)
-        if len(levels) > 1 and _check_error(levels)[0] <= rtol * abs(levels[-1][2].U_A):
+        if rtol is None:
+            continue
+        if len(levels) > 1 and _met(levels, rtol):
+            return levels
+        if len(levels) > 1 and _pressing_points(levels[-1][2]):
+            levels[-1] += ("point fingers press the part: its energies follow the mesh, so "
+                           "refining does not converge (model the fingertips as discs)",)
             return levels
         growth = seconds[-1] / seconds[-2] if len(seconds) > 1 and seconds[-2] > 0 else 4.0
         predicted = seconds[-1] * min(max(growth, 1.5), 16.0)
-        if time.perf_counter() - t_start + predicted > budget:
+        if k + 1 < n_levels and time.perf_counter() - t_start + predicted > budget:
             levels[-1] += (f"time budget: level {k + 2} would take about {predicted:.0f} s, "
                            f"beyond --max-seconds {budget:g}",)
             return levels
-    levels[-1] += (f"{MAX_LEVELS} levels solved",)
+    if rtol is not None:
+        levels[-1] += (f"{n_levels} levels solved",)
     return levels
+
+
+def _pressing_points(rel) -> bool:
+    """Whether point fingers press the part in this release result (its warning)."""
+    return any(w.startswith("point fingers") for w in rel.warnings)
+
+
+def _met(levels, rtol: float) -> bool:
+    """The stopping rule of ``check --rtol``: U_A and the quality within ``rtol`` by their
+    estimates, or no barrier at the start on the last two levels (SPEC §6)."""
+    import math
+
+    e_ua, e_q = _check_error(levels)
+    last = levels[-1][2]
+    if last.U_A == 0 and levels[-2][2].U_A == 0:
+        return True
+    return (e_ua <= rtol * abs(last.U_A) and
+            (e_q <= rtol * abs(last.quality) or not math.isfinite(last.quality)))
 
 
 def _check_error(levels) -> tuple[float, float]:
@@ -144,14 +187,16 @@ def _check_error(levels) -> tuple[float, float]:
     return e_ua + lattice, e_q + lattice
 
 
-def _refinement_lines(data: dict, levels, rtol: float, max_seconds) -> tuple[list[str], list[str]]:
-    """Add ``convergence``, ``error_estimate`` and ``converged`` to ``data``; the lines and
-    warnings they print."""
+def _refinement_lines(data: dict, levels, rtol: float | None) -> tuple[list[str], list[str]]:
+    """Add ``convergence``, ``error_estimate``, ``converged``, ``rtol`` and ``refinement``
+    to ``data``; the lines and warnings they print."""
     import math
 
     e_ua, e_q = _check_error(levels) if len(levels) > 1 else (math.nan, math.nan)
     fine = levels[-1][2]
-    converged = len(levels) > 1 and e_ua <= rtol * abs(fine.U_A)
+    from ..pads.refine import DEFAULT_RTOL
+
+    converged = len(levels) > 1 and _met(levels, DEFAULT_RTOL if rtol is None else rtol)
     num = lambda v: None if not math.isfinite(v) else float(v)  # noqa: E731
     data["convergence"] = [{"level": k, "nodes": lv[0].n_nodes, "U_A": num(lv[2].U_A),
                             "U_A_infinite": math.isinf(lv[2].U_A), "U_A_error": num(lv[2].U_A_error),
@@ -160,17 +205,21 @@ def _refinement_lines(data: dict, levels, rtol: float, max_seconds) -> tuple[lis
     data["error_estimate"] = {"U_A": num(e_ua), "quality": num(e_q)}
     data["converged"] = bool(converged)
     data["rtol"] = rtol
-    lines = [f"{'level':>5} {'nodes':>7} {'U_A (J)':>12} {'± lattice (J)':>14}"]
+    data["refinement"] = "uniform"
+    lines = [f"{'level':>5} {'nodes':>7} {'U_A (J)':>12} {'± lattice (J)':>14} {'quality (J)':>12}"]
     for row in data["convergence"]:
         ua = "infinite" if row["U_A_infinite"] else f"{row['U_A']:.5g}"
         le = "-" if row["U_A_error"] is None else f"{row['U_A_error']:.3g}"
-        lines.append(f"{row['level']:>5} {row['nodes']:>7} {ua:>12} {le:>14}")
-    lines.append(f"error estimate (mesh levels plus lattice, target rtol {rtol:g}): U_A ± "
-                 f"{e_ua:.3g} J; converged: {'yes' if converged else 'no'}")
+        q = "infinite" if row["quality"] is None else f"{row['quality']:.5g}"
+        lines.append(f"{row['level']:>5} {row['nodes']:>7} {ua:>12} {le:>14} {q:>12}")
+    target = "" if rtol is None else f", target rtol {rtol:g}"
+    lines.append(f"error estimate (mesh levels plus lattice{target}): U_A ± {e_ua:.3g} J, "
+                 f"quality ± {e_q:.3g} J; converged: {'yes' if converged else 'no'}")
     warnings = []
-    if not converged:
+    if rtol is not None and not converged:
         why = levels[-1][3] if len(levels[-1]) > 3 else "no estimate"
-        warnings.append(f"not converged to --rtol {rtol:g} ({why}): raise --max-seconds or --rtol")
+        fix = ("" if _pressing_points(fine) else ": raise --max-seconds or --rtol")
+        warnings.append(f"not converged to --rtol {rtol:g} ({why}){fix}")
     return lines, warnings
 
 
@@ -214,6 +263,7 @@ def _lines(mesh, fingers, res, rel) -> tuple[list[str], list[str]]:
                         "model)")
     if res.twist is not None:
         t = res.twist
+        t = np.asarray(t, float) + 0.0                # no "-0" in print
         lines.append(f"escaping twist: v = ({t[0]:.4g}, {t[1]:.4g}) m/s, omega = {t[2]:.4g} "
                      "rad/s (about the area centroid)")
     return lines, warnings

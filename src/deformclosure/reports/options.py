@@ -208,8 +208,12 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="Write the fields at the equilibrium to FILE.vtu for ParaView: deformed "
                  "mesh, displacement, strain, contact pressure."),
         Opt("rtol", ("--rtol",), "float",
-            help="Refine the mesh (h halved per level) until U_A's error estimate (mesh "
-                 "levels plus lattice) is within this fraction of it; default: one mesh."),
+            help="Refine the mesh (h halved per level) until the error estimates of U_A and "
+                 "of the quality (mesh levels plus lattice) are within this fraction "
+                 "(default 0.05; a mesh file is solved once)."),
+        Opt("refine", ("--refine",), "int",
+            help="Solve N uniform mesh levels instead of refining to --rtol; 1 = one mesh, "
+                 "no error estimate."),
         _ACCURACY[1],
         _MATERIAL, _UNITS, _MAX_AREA,
         *_DISPLAY,
