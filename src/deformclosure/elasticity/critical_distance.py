@@ -302,6 +302,8 @@ class DiscAverage:
         self.centroids, self.areas = _centroids_and_areas(mesh)
         self.m = len(self.areas)
         self._tree = cKDTree(self.centroids) if self.ell > 0.0 else None
+        #: element pairs (rows' non-zeros of ``W``) built so far, for the benchmarks
+        self.pairs_built = 0
         if self.ell > 0.0:
             self._build_grid()
 
@@ -405,6 +407,7 @@ class DiscAverage:
             self._tree, self.ell, output_type="ndarray")
         i, j = pairs["i"], pairs["j"]
         del pairs
+        self.pairs_built += len(i)
         weights = self.areas[j]
         weights /= np.bincount(i, weights=weights, minlength=r)[i]
         return sp.csr_matrix((weights, (i, j)), shape=(r, self.m))
