@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
@@ -213,6 +213,8 @@ def test_path_limit_equals_the_rule_on_every_averaged_element(seed, args, cells,
     Ebar = reference_averages(W, E)
     e_bp = magnitude(Ebar).max(axis=1)
     e_L = level * e_bp.max() if e_bp.max() > 0 else 1.0
+    # a breakpoint exactly at e_L: which side it falls on is rounding, in both codes
+    assume(np.all(np.abs(e_bp - e_L) > 1e-9 * e_L))
     want = first_limit_crossing(Ebar, e_L)
     got = path_elastic_limit(DiscAverage(mesh, ell), E, e_L)
     np.testing.assert_allclose(got.e_breakpoints, e_bp, rtol=REL, atol=1e-300)

@@ -255,8 +255,15 @@ def averaged_strain_magnitude(mesh, strains: np.ndarray, ell: float | None,
 
 
 def _magnitudes(T: np.ndarray) -> np.ndarray:
-    """Largest absolute principal value of engineering strain tensors ``T (..., 3)``."""
-    return np.abs(principal_strains(T.reshape(-1, 3))).max(axis=1).reshape(T.shape[:-1])
+    """Largest absolute principal value of engineering strain tensors ``T (..., 3)``:
+    ``|c| + r`` (centre and radius of Mohr's circle), bit for bit the
+    ``max(|c + r|, |c - r|)`` of :func:`~deformclosure.elasticity.strain.principal_strains`
+    (``r >= 0``, rounding is monotone), with no ``(..., 2)`` temporaries."""
+    T = np.asarray(T, float)
+    exx, eyy, g = T[..., 0], T[..., 1], T[..., 2]
+    out = np.hypot(0.5 * (exx - eyy), 0.5 * g)
+    out += np.abs(0.5 * (exx + eyy))
+    return out
 
 
 def _stack(mesh_m: int, strains: np.ndarray) -> np.ndarray:
@@ -337,6 +344,22 @@ class DiscAverage:
         #: upper bound of the number of elements in each element's disc
         self.disc_size_bound = within.ravel()[self._cell].astype(np.int64)
 
+    def _cell_bound(self, cellmax: np.ndarray) -> np.ndarray:
+        """``(k, cells)`` largest magnitude per cell -> the largest within each cell's
+        footprint: the bound of every element of the cell."""
+        from scipy import ndimage
+
+        grid = cellmax.reshape(len(cellmax), *self._grid_shape)
+        top = ndimage.maximum_filter(grid, footprint=self._footprint[None], mode="constant",
+                                     cval=0.0)
+        return top.reshape(len(cellmax), -1)
+
+    def _cell_max(self, magnitudes: np.ndarray) -> np.ndarray:
+        """Largest of ``magnitudes (m,)`` in each grid cell, shape (cells,)."""
+        out = np.zeros(self._grid_shape[0] * self._grid_shape[1])
+        out[self._cells] = np.maximum.reduceat(magnitudes[self._order], self._starts)
+        return out
+
     def bound(self, magnitudes: np.ndarray) -> np.ndarray:
         """Upper bound of the disc-averaged magnitude of every element: the largest element
         magnitude in the cells its disc may reach.
@@ -351,19 +374,12 @@ class DiscAverage:
         ndarray, same shape
             ``bound[i] >= max(magnitudes[j] for j in disc(i))`` (dimensionless).
         """
-        from scipy import ndimage
-
         mag = np.asarray(magnitudes, float)
         if self.ell == 0.0:
             return mag.copy()
         flat = mag.reshape(-1, self.m)
-        cellmax = np.zeros((len(flat), self._grid_shape[0] * self._grid_shape[1]))
-        for f in range(len(flat)):      # per field: faster than reduceat along axis 1
-            cellmax[f, self._cells] = np.maximum.reduceat(flat[f, self._order], self._starts)
-        grid = cellmax.reshape(len(flat), *self._grid_shape)
-        top = ndimage.maximum_filter(grid, footprint=self._footprint[None], mode="constant",
-                                     cval=0.0)
-        return top.reshape(len(flat), -1)[:, self._cell].reshape(mag.shape)
+        cellmax = np.stack([self._cell_max(f) for f in flat])
+        return self._cell_bound(cellmax)[:, self._cell].reshape(mag.shape)
 
     # ------------------------------------------------------------------ rows of W
     def _chunks(self, rows: np.ndarray):
@@ -471,7 +487,9 @@ class DiscAverage:
         ``(W @ strains)[i]`` — :func:`averaged_strain_magnitude` maximised over the
         elements — averaging only the rows that can hold it: first the rows of each field's
         :data:`SEED_ROWS` largest element magnitudes, then, by decreasing bound
-        (:meth:`bound`), every row whose bound reaches the largest average found so far.
+        (:meth:`bound`, per grid cell), every row whose bound reaches the largest average
+        found so far. Besides ``strains`` it holds ``O(k × cells + m)`` numbers and one
+        chunk of rows.
 
         Parameters
         ----------
@@ -483,8 +501,7 @@ class DiscAverage:
         values : float or ndarray, shape (k,)
             The maxima (dimensionless).
         elements : int or ndarray of int, shape (k,)
-            An element attaining each (the first of equal averages found, as
-            ``numpy.argmax``).
+            An element attaining each (the first of equal averages, as ``numpy.argmax``).
 
         Raises
         ------
@@ -494,57 +511,75 @@ class DiscAverage:
         e = _stack(self.m, strains)
         E = e if e.ndim == 3 else e[None]
         k = len(E)
-        mag = _magnitudes(E)                                       # (k, m)
-        if self.ell == 0.0:
-            best, arg = mag.max(axis=1), mag.argmax(axis=1)
-            return (best, arg) if e.ndim == 3 else (float(best[0]), int(arg[0]))
         best = np.full(k, -1.0)
         arg = np.zeros(k, np.int64)
-        done = np.zeros((k, self.m), bool)
-        finite = np.isfinite(mag).all(axis=1)
-        for f in np.flatnonzero(~finite):   # NaN or inf: every row, as W @ strains does
-            v = _magnitudes(self.averaged(E[f]))
-            best[f], arg[f] = v.max(), v.argmax()
+        if self.ell == 0.0:
+            for f in range(k):
+                v = _magnitudes(E[f])
+                best[f], arg[f] = v.max(), v.argmax()
+            return (best, arg) if e.ndim == 3 else (float(best[0]), int(arg[0]))
+        s = min(SEED_ROWS, self.m)
+        ncells = self._grid_shape[0] * self._grid_shape[1]
+        cellmax = np.zeros((k, ncells))
+        seeds, finite = [], np.ones(k, bool)
+        for f in range(k):          # one field at a time: O(m) temporaries
+            mag = _magnitudes(E[f])
+            if not np.isfinite(mag).all():      # NaN or inf: every row, as W @ strains does
+                finite[f] = False
+                v = _magnitudes(self.averaged(E[f]))
+                best[f], arg[f] = v.max(), v.argmax()
+                continue
+            cellmax[f] = self._cell_max(mag)
+            seeds.append(np.argpartition(-mag, s - 1)[:s])
+        fin = np.flatnonzero(finite)
 
         def take(rows: np.ndarray, need: np.ndarray) -> None:
-            """Average ``rows`` for the fields that ``need (k, r)`` them; update the maxima."""
+            """Average ``rows`` for the fields ``fin`` that ``need (len(fin), r)`` them;
+            update the maxima."""
             for part in self._chunks(rows):
                 r, nd = rows[part], need[:, part]
-                fields = np.flatnonzero(nd.any(axis=1))
-                if not len(fields):
+                use = nd.any(axis=1)
+                if not use.any():
                     continue
-                nd = nd[fields]
+                fields, nd = fin[use], nd[use]
                 v = np.where(nd, _magnitudes(self._products(self.operator_rows(r), E, fields)),
                              -np.inf)                              # (f, r)
-                done[fields[:, None], r[None, :]] |= nd
                 top = v.max(axis=1)
                 at = np.where(v == top[:, None], r[None, :], self.m).min(axis=1)
                 better = (top > best[fields]) | ((top == best[fields]) & (at < arg[fields]))
                 best[fields[better]], arg[fields[better]] = top[better], at[better]
 
-        s = min(SEED_ROWS, self.m)
-        seeds = np.unique(np.argpartition(-mag[finite], s - 1, axis=1)[:, :s])
-        need = np.zeros((k, len(seeds)), bool)
-        need[finite] = True
-        take(seeds, need)
-        ub = self.bound(mag)                                       # (k, m)
-        thr = np.where(best > 0, best * (1.0 - PRUNE_MARGIN), 0.0)
-        need = (ub >= thr[:, None]) & (ub > 0) & ~done & finite[:, None]
-        cand = np.flatnonzero(need.any(axis=0))
-        if len(cand):
-            # largest bound (relative to each field's maximum so far) first
-            with np.errstate(divide="ignore", invalid="ignore"):
-                rel = np.where(thr[:, None] > 0, ub[:, cand] / thr[:, None], np.inf)
-                own = np.where(thr[:, None] > 0, mag[:, cand] / thr[:, None], np.inf)
-            order = np.lexsort((-own.max(axis=0), -rel.max(axis=0)))
-            cand = cand[order]
-            for part in self._chunks(cand):
-                r = cand[part]
-                thr = np.where(best > 0, best * (1.0 - PRUNE_MARGIN), 0.0)
-                nd = (ub[:, r] >= thr[:, None]) & (ub[:, r] > 0) & ~done[:, r] & finite[:, None]
-                keep = nd.any(axis=0)
-                if keep.any():
-                    take(r[keep], nd[:, keep])
+        if len(fin):
+            seeds = np.unique(np.concatenate(seeds))
+            take(seeds, np.ones((len(fin), len(seeds)), bool))
+            ub = self._cell_bound(cellmax[fin])                    # (f, cells)
+            del cellmax
+
+            def needed(cells: np.ndarray) -> np.ndarray:
+                thr = np.where(best[fin] > 0, best[fin] * (1.0 - PRUNE_MARGIN), 0.0)
+                u = ub[:, cells]
+                return (u >= thr[:, None]) & (u > 0)
+
+            hot = np.flatnonzero(needed(np.arange(ncells)).any(axis=0))
+            if len(hot):
+                # rows of the hot cells, largest bound relative to the maximum so far first
+                thr0 = np.where(best[fin] > 0, best[fin], np.inf)[:, None]
+                with np.errstate(invalid="ignore"):
+                    rank = np.nan_to_num((ub[:, hot] / thr0), nan=np.inf).max(axis=0)
+                counts = np.bincount(self._cell, minlength=ncells)
+                order = hot[np.argsort(-rank, kind="stable")]
+                starts = np.searchsorted(self._cell[self._order], order)
+                rows = np.concatenate([self._order[a:a + n] for a, n in
+                                       zip(starts, counts[order])])
+                seen = np.zeros(self.m, bool)
+                seen[seeds] = True
+                rows = rows[~seen[rows]]
+                for part in self._chunks(rows):
+                    r = rows[part]
+                    nd = needed(self._cell[r])                     # with the maxima so far
+                    keep = nd.any(axis=0)
+                    if keep.any():
+                        take(r[keep], nd[:, keep])
         # an all-zero average: numpy's argmax is the first element
         zero = finite & (best <= 0)
         arg[zero], best[zero] = 0, 0.0
