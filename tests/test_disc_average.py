@@ -313,3 +313,18 @@ def test_edge_cases_of_the_maximum():
         DiscAverage(mesh, 1.0).maxima(np.zeros((3, 3)))
     with pytest.raises(cd.GraspError, match="critical_distance"):
         DiscAverage(mesh, -1.0)
+
+
+def test_a_full_operator_beyond_the_memory_budget_is_refused_but_averages_are_not():
+    """10 880 triangles with one disc over the whole part: W would hold 1.2e8 non-zeros
+    (7 GB); the maximum needs none of them stored."""
+    from deformclosure import notched_part
+    from deformclosure.errors import GraspError
+
+    mesh = mesh_part(notched_part(), max_area=0.05e-6)
+    with pytest.raises(GraspError, match="full averaging operator.*DiscAverage") as info:
+        cd.averaging_operator(mesh, 1.0)
+    assert "\n" not in str(info.value)
+    E = np.broadcast_to([1e-3, -2e-3, 5e-4], (mesh.n_triangles, 3))   # homogeneous
+    assert averaged_strain_maximum(mesh, E, 1.0) == pytest.approx(magnitude(E[:1])[0],
+                                                                  rel=1e-12)

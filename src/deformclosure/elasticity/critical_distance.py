@@ -132,6 +132,24 @@ def _centroids_and_areas(mesh) -> tuple[np.ndarray, np.ndarray]:
     return centroids, areas
 
 
+def _check_operator_fits(mesh, ell: float) -> None:
+    """Refuse a full averaging operator whose construction would exceed the memory budget
+    (``AVERAGING_BYTES_PER_NONZERO`` per non-zero): the grid's bound first, the exact pair
+    count (a KD-tree count, no pair list) when the bound is too large."""
+    from ..limits import AVERAGING_BYTES_PER_NONZERO, GB, MEMORY_BUDGET, format_count
+
+    disc = disc_average(mesh, ell)
+    if AVERAGING_BYTES_PER_NONZERO * float(disc.disc_size_bound.sum()) <= MEMORY_BUDGET:
+        return
+    nnz = float(disc._tree.count_neighbors(disc._tree, ell))
+    need = AVERAGING_BYTES_PER_NONZERO * nnz
+    if need > MEMORY_BUDGET:
+        raise GraspError(f"critical_distance = {ell:.3g} m: the full averaging operator of this "
+                         f"{disc.m:,}-triangle mesh has {format_count(nnz)} non-zeros (about "
+                         f"{need / GB:.1f} GB, more than {MEMORY_BUDGET / GB:.0f} GB); use "
+                         "averaged_strains or DiscAverage, which average in chunks")
+
+
 def averaging_operator(mesh, ell: float) -> sp.csr_matrix:
     """Area-weighted averaging over discs of radius ``ell`` around element centroids.
 
@@ -139,6 +157,11 @@ def averaging_operator(mesh, ell: float) -> sp.csr_matrix:
     centroid of element ``i`` (distance ``<= ell``; ``j = i`` always included),
     the weight ``A_j / sum_k A_k`` (sum over the same disc), so every row sums to 1 and
     ``W @ f`` is the area-weighted mean of an element field ``f`` over each disc.
+
+    It holds ``m`` times the elements per disc (about ``m² π ℓ² / A`` non-zeros, 60 bytes
+    each while it is built); the package's analyses use :class:`DiscAverage` instead, which
+    builds the rows it needs in chunks. An operator that would not fit in the memory budget
+    (:data:`deformclosure.limits.MEMORY_BUDGET`) is refused.
 
     Parameters
     ----------
@@ -155,7 +178,8 @@ def averaging_operator(mesh, ell: float) -> sp.csr_matrix:
     Raises
     ------
     GraspError
-        If ``ell`` is negative or not finite (the message names ``critical_distance``).
+        If ``ell`` is negative or not finite (the message names ``critical_distance``), or
+        the operator would not fit in the memory budget.
     """
     from scipy.spatial import cKDTree  # lazy: scipy.spatial is slow to import
 
@@ -164,6 +188,7 @@ def averaging_operator(mesh, ell: float) -> sp.csr_matrix:
     m = len(areas)
     diag = np.arange(m)
     if ell > 0.0:
+        _check_operator_fits(mesh, ell)
         pairs = cKDTree(centroids).query_pairs(ell, output_type="ndarray")  # i < j, d <= ell
         rows = np.concatenate([diag, pairs[:, 0], pairs[:, 1]])
         cols = np.concatenate([diag, pairs[:, 1], pairs[:, 0]])
@@ -197,7 +222,9 @@ def averaged_strains(mesh, strains: np.ndarray, ell: float | None,
         Critical distance (m), finite and >= 0; ignored (may be ``None``) when
         ``operator`` is given.
     operator : sparse matrix, shape (m, m), optional
-        A precomputed :func:`averaging_operator` of this mesh, to reuse for many fields.
+        A precomputed :func:`averaging_operator` of this mesh, to reuse for many fields;
+        by default the rows are built in chunks (:meth:`DiscAverage.averaged`), never the
+        whole operator.
 
     Returns
     -------
@@ -313,6 +340,14 @@ class DiscAverage:
         self.pairs_built = 0
         if self.ell > 0.0:
             self._build_grid()
+            # discs holding every element (ℓ beyond the farthest corner of the centroids'
+            # box): one average, the part's area-weighted mean, for all of them
+            c = self.centroids
+            far = np.maximum(c - c.min(axis=0), c.max(axis=0) - c)
+            self._whole = np.hypot(far[:, 0], far[:, 1]) <= self.ell * (1.0 - PRUNE_MARGIN)
+        else:
+            self._whole = np.zeros(self.m, bool)
+        self._rep = int(np.argmax(self._whole)) if self._whole.any() else -1
 
     # ------------------------------------------------------------------ the grid bound
     def _build_grid(self) -> None:
@@ -456,8 +491,13 @@ class DiscAverage:
             out[:] = E[:, rows]
         else:
             every = np.arange(len(E))
-            for part in self._chunks(rows):
-                out[:, part] = self._products(self.operator_rows(rows[part]), E, every)
+            whole = self._whole[rows]
+            if whole.any():             # one row for every disc that holds the whole part
+                out[:, whole] = self._products(self.operator_rows([self._rep]), E, every)
+            rest = np.flatnonzero(~whole)
+            for part in self._chunks(rows[rest]):
+                out[:, rest[part]] = self._products(self.operator_rows(rows[rest[part]]), E,
+                                                    every)
         return out if e.ndim == 3 else out[0]
 
     def _products(self, W: sp.csr_matrix, E: np.ndarray, fields: np.ndarray) -> np.ndarray:
@@ -550,7 +590,10 @@ class DiscAverage:
                 best[fields[better]], arg[fields[better]] = top[better], at[better]
 
         if len(fin):
-            seeds = np.unique(np.concatenate(seeds))
+            seeds = np.concatenate(seeds)
+            if self._rep >= 0:          # whole-part discs: one stands for all (equal means)
+                seeds = np.append(np.where(self._whole[seeds], self._rep, seeds), self._rep)
+            seeds = np.unique(seeds)
             take(seeds, np.ones((len(fin), len(seeds)), bool))
             ub = self._cell_bound(cellmax[fin])                    # (f, cells)
             del cellmax
@@ -571,7 +614,7 @@ class DiscAverage:
                 starts = np.searchsorted(self._cell[self._order], order)
                 rows = np.concatenate([self._order[a:a + n] for a, n in
                                        zip(starts, counts[order])])
-                seen = np.zeros(self.m, bool)
+                seen = self._whole.copy()
                 seen[seeds] = True
                 rows = rows[~seen[rows]]
                 for part in self._chunks(rows):
