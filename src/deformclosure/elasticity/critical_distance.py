@@ -357,9 +357,9 @@ class DiscAverage:
         lo = c.min(axis=0)
         span = c.max(axis=0) - lo
         # about 4 cells per element at most (a tiny ℓ): coarser cells, a 3 × 3 footprint
-        cells = 4.0 * max(m, 16)
-        h = max(self.ell / CELLS_PER_ELL, math.sqrt(span[0] * span[1] / cells),
-                span.max() / cells)
+        most = 4.0 * max(m, 16)
+        h = max(self.ell / CELLS_PER_ELL, math.sqrt(span[0] * span[1] / most),
+                span.max() / most)
         shape = (np.floor(span / h) + 1).astype(np.int64)          # (nx, ny)
         ij = np.minimum(np.floor((c - lo) / h).astype(np.int64), shape - 1)
         self._cell = ij[:, 1] * shape[0] + ij[:, 0]               # row-major (y, x)
@@ -370,10 +370,9 @@ class DiscAverage:
         gap = np.maximum(np.abs(d) - 1.0 - 1e-6, 0.0)               # nearest points, in cells
         self._footprint = gap[:, None] ** 2 + gap[None, :] ** 2 <= reach * reach
         self._order = np.argsort(self._cell, kind="stable")
-        cells, self._starts = np.unique(self._cell[self._order], return_index=True)
-        self._cells = cells
+        self._cells, self._starts = np.unique(self._cell[self._order], return_index=True)
         count = np.zeros(self._grid_shape).ravel()
-        count[cells] = np.diff(np.append(self._starts, m))
+        count[self._cells] = np.diff(np.append(self._starts, m))
         within = ndimage.correlate(count.reshape(self._grid_shape),
                                    self._footprint.astype(float), mode="constant", cval=0.0)
         #: upper bound of the number of elements in each element's disc
