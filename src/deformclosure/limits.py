@@ -163,14 +163,24 @@ PADS_WORK_BYTES_PER_P2 = 55.0
 #: measured 180-210 (plans of 500- and 1000-node circles, 1440 axes).
 PADS_AXIS_BYTES_PER_NODE = 210.0
 
-#: Largest number of non-zeros of the critical-distance averaging operator (pads model,
-#: SPEC §6): every element times the elements whose centroids lie within the critical
-#: distance ℓ of its own — about ``m² π ℓ² / A``. Protects its construction, which takes
-#: :data:`AVERAGING_BYTES_PER_NONZERO` bytes per non-zero.
-MAX_AVERAGING_NONZEROS = 40_000_000
+#: Largest number of element pairs of the critical-distance averages (pads model, SPEC §6):
+#: every element times the elements whose centroids lie within the critical distance ℓ
+#: of its own — about ``m² π ℓ² / A``, the non-zeros of the averaging operator. The
+#: analyses never hold that operator (``DiscAverage`` builds rows in chunks of bounded
+#: memory, :data:`AVERAGING_CHUNK_BYTES`), so this protects the *work*: an evaluation whose
+#: bound prunes nothing (a field export averages every element) visits every pair, about
+#: 0.1 µs each (``benchmarks/bench_critical_distance.py``), 40 s at the limit.
+MAX_AVERAGING_NONZEROS = 400_000_000
 
-#: Peak bytes per non-zero of building the averaging operator (pair list, COO, CSR).
+#: Peak bytes per non-zero of building the full averaging operator
+#: (``averaging_operator``: pair list, COO, CSR); it refuses an operator above the budget.
 AVERAGING_BYTES_PER_NONZERO = 60.0
+
+#: Memory of the critical-distance averages as the analyses compute them: one chunk of
+#: rows (``CHUNK_PAIRS`` = 400 000 pairs at about 100 bytes) plus, per triangle, the
+#: centroids, areas, KD-tree and grid of ``DiscAverage`` (measured ~100 bytes, counted 150).
+AVERAGING_CHUNK_BYTES = 40e6
+AVERAGING_BYTES_PER_TRIANGLE = 150.0
 
 #: Strain responses of the paper planner (``pair_elastic_limits``): bytes per perimeter
 #: node and triangle (6 strain rows of 8 bytes) plus per perimeter node and node.
@@ -590,7 +600,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         out["factorisation"] *= k
         out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * k + PADS_WORK_BYTES_PER_P2) * p * p
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
-        out["averaging"] = AVERAGING_BYTES_PER_NONZERO * _averaging_nonzeros(n_triangles, area, ell)
+        # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
+        out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
@@ -648,7 +659,8 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
             raise GraspError(f"{what}: averaging strains over the critical distance "
                              f"({ell:.3g} m) on {n_triangles:,} triangles needs "
                              f"{format_count(nnz)} element pairs (limit "
-                             f"{format_count(MAX_AVERAGING_NONZEROS)}); coarsen the mesh "
+                             f"{format_count(MAX_AVERAGING_NONZEROS)}, the work of one "
+                             "evaluation); coarsen the mesh "
                              "(larger max_area) or give a smaller "
                              "material.critical_distance")
     est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,

@@ -234,7 +234,8 @@ class BoundaryCompliance:
     def averaging_operator(self, ell: float) -> sp.csr_matrix:
         """The critical-distance averaging operator of this mesh for ``ell`` (m)
         (:func:`deformclosure.elasticity.critical_distance.averaging_operator`), built
-        once per ``ell``."""
+        once per ``ell``. It holds ``m`` times the elements per disc; the elastic limits
+        use :func:`~deformclosure.elasticity.critical_distance.disc_average` instead."""
         W = self._averaging.get(ell)
         if W is None:
             W = self._averaging[ell] = averaging_operator(self.mesh, ell)

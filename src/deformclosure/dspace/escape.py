@@ -593,16 +593,14 @@ def _minimise(pe: PlacementEnergy, g0: np.ndarray, h: float, h_phi: float) -> np
     return np.asarray(g0, float) + z * scale
 
 
-def _strain(pe: PlacementEnergy, state: PlacementState, operator) -> float:
-    from ..elasticity.critical_distance import averaged_strains
+def _strain(pe: PlacementEnergy, state: PlacementState, ell: float) -> float:
+    from ..elasticity.critical_distance import averaged_strain_maximum
     from ..elasticity.strain import element_strains
-    from ..landscape.limit import strain_measure
 
     if len(state.forces) == 0:
         return 0.0
     u = pe.displacement(state)
-    e = averaged_strains(pe.mesh, element_strains(pe.mesh, u), None, operator=operator)
-    return float(strain_measure(e).max())
+    return float(averaged_strain_maximum(pe.mesh, element_strains(pe.mesh, u), ell))
 
 
 def release_energy_fingers(mesh: Any, fingers: Sequence[Finger], *, part: Any = None, solver: Any = None,
@@ -886,13 +884,12 @@ def _elastic_limit(mesh: Any, pe: PlacementEnergy, land: PlacementLandscape, sta
                    path: list, saddle: int | None, Es: float) -> tuple:
     """Critical distance ``ℓ`` (m), averaged strains at the equilibrium and the saddle,
     ``e_L`` and ``U_L`` (J): the elastic limit over the critical distance."""
-    from ..elasticity.critical_distance import averaging_operator, critical_distance_of
+    from ..elasticity.critical_distance import critical_distance_of
     from ..landscape.limit import energy_to_limit_from_rest
 
     ell = critical_distance_of(mesh)
-    op = averaging_operator(mesh, ell)
-    e_star = _strain(pe, start_state, op)
-    e_sad = _strain(pe, land.state(path[saddle]), op) if saddle is not None else None
+    e_star = _strain(pe, start_state, ell)
+    e_sad = _strain(pe, land.state(path[saddle]), ell) if saddle is not None else None
     mat = getattr(mesh, "material", None)
     e_L = None if mat is None else float(mat.elastic_limit_strain)
     # the one elastic-limit rule: the state loaded proportionally from rest

@@ -20,13 +20,14 @@ kept as the vectorised form of this closed form for all jaw pairs at once).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from ..elasticity.strain import principal_strains
 
-__all__ = ["LimitCrossing", "strain_measure", "first_limit_crossing",
-           "energy_to_limit_from_rest"]
+__all__ = ["LimitCrossing", "PathLimit", "strain_measure", "first_limit_crossing",
+           "limit_crossing", "path_elastic_limit", "energy_to_limit_from_rest"]
 
 
 @dataclass(frozen=True)
@@ -99,8 +100,34 @@ def first_limit_crossing(strains: np.ndarray, e_L: float) -> LimitCrossing:
     ((0, 1), 0.5, True)
     """
     T = np.asarray(strains, float)
-    e_bp = strain_measure(T).max(axis=1)
-    above = np.flatnonzero(e_bp >= e_L)
+    return limit_crossing(strain_measure(T).max(axis=1), e_L, lambda i0, i1: (T[i0], T[i1]),
+                          lambda i0: not np.any(T[i0]))
+
+
+def limit_crossing(e_bp: np.ndarray, e_L: float,
+                   piece: Callable[[int, int], tuple[np.ndarray, np.ndarray]],
+                   at_rest: Callable[[int], bool]) -> LimitCrossing:
+    """The rule of :func:`first_limit_crossing` from the breakpoints' maxima.
+
+    Parameters
+    ----------
+    e_bp : ndarray, shape (k,)
+        Strain measure maximised over the elements at each breakpoint.
+    e_L : float
+        Elastic-limit strain (> 0).
+    piece : callable
+        ``piece(i0, i1) -> (T0, T1)``: the averaged strain tensors ``(r, 3)`` at both ends
+        of the piece of every element that can reach ``e_L`` on it (all elements, or those
+        a bound cannot exclude: the crossing is the same).
+    at_rest : callable
+        ``at_rest(i0)``: whether the strain at breakpoint ``i0`` is zero (the measure is
+        then homogeneous on the piece, and the crossing has a closed form).
+
+    Returns
+    -------
+    LimitCrossing
+    """
+    above = np.flatnonzero(np.asarray(e_bp) >= e_L)
     if len(above) == 0:
         j = len(e_bp) - 1
         return LimitCrossing((j, j), 0.0, False)
@@ -108,17 +135,90 @@ def first_limit_crossing(strains: np.ndarray, e_L: float) -> LimitCrossing:
     if j == 0:
         return LimitCrossing((0, 0), 0.0, True)
     i0, i1 = j - 1, j
-    if not np.any(T[i0]):
+    if at_rest(i0):
         # from zero strain the measure is homogeneous along the piece: closed form
         return LimitCrossing((i0, i1), float(e_L / e_bp[i1]), True)
+    T0, T1 = piece(i0, i1)
     s_lo, s_hi = 0.0, 1.0
     for _ in range(60):   # convex in s on the piece, below e_L at 0, at or above at 1
         s = 0.5 * (s_lo + s_hi)
-        if strain_measure((1 - s) * T[i0] + s * T[i1]).max() >= e_L:
+        if strain_measure((1 - s) * T0 + s * T1).max() >= e_L:
             s_hi = s
         else:
             s_lo = s
     return LimitCrossing((i0, i1), s_hi, True)
+
+
+@dataclass(frozen=True)
+class PathLimit:
+    """The elastic limit of a piecewise-linear loading path, with the strain measure over
+    the critical distance (:func:`path_elastic_limit`).
+
+    Attributes
+    ----------
+    crossing : LimitCrossing
+        Where the measure first reaches ``e_L``.
+    e_breakpoints : ndarray, shape (k,)
+        The measure (maximised over the elements) at each breakpoint (dimensionless).
+    critical_element : int
+        Element of the largest averaged strain at the crossing (at the last breakpoint when
+        the limit is not reached).
+    element_max : float
+        Largest *element* (not averaged) strain magnitude there (dimensionless).
+    """
+
+    crossing: LimitCrossing
+    e_breakpoints: np.ndarray
+    critical_element: int
+    element_max: float
+
+
+def path_elastic_limit(disc, strains: np.ndarray, e_L: float) -> PathLimit:
+    """The one elastic-limit rule on a path given by its *element* strains.
+
+    The same crossing as :func:`first_limit_crossing` of the averaged strains
+    ``W @ strains`` (SPEC §6), from the few discs that can reach the limit: the maxima at
+    the breakpoints by :meth:`~deformclosure.elasticity.critical_distance.DiscAverage.maxima`,
+    and the bisection on the crossing piece over the elements whose bound reaches ``e_L``
+    at one of its ends (the measure is convex along the piece, so an average below ``e_L``
+    at both ends stays below it).
+
+    Parameters
+    ----------
+    disc : DiscAverage
+        The mesh's averages for its critical distance
+        (:func:`~deformclosure.elasticity.critical_distance.disc_average`).
+    strains : ndarray, shape (k, m, 3)
+        Element strain tensors ``[exx, eyy, gamma_xy]`` at the ``k`` breakpoints (linear in
+        between).
+    e_L : float
+        Elastic-limit strain (> 0).
+
+    Returns
+    -------
+    PathLimit
+    """
+    E = np.asarray(strains, float)
+    e_bp, elements = disc.maxima(E)
+    held: dict[str, np.ndarray] = {}
+
+    def piece(i0: int, i1: int) -> tuple[np.ndarray, np.ndarray]:
+        reach = np.maximum(strain_measure(E[i0]), strain_measure(E[i1]))
+        held["rows"] = rows = disc.candidates(reach, e_L)
+        held["T"] = T = disc.averaged(E[[i0, i1]], rows)
+        return T[0], T[1]
+
+    hit = limit_crossing(e_bp, e_L, piece, lambda i0: not np.any(E[i0]))
+    if not hit.reached:
+        j = len(e_bp) - 1
+        return PathLimit(hit, e_bp, int(elements[j]), float(strain_measure(E[j]).max()))
+    i0, i1 = hit.piece
+    if "rows" in held:                    # bisected: the largest average at the crossing
+        Tbar = (1 - hit.fraction) * held["T"][0] + hit.fraction * held["T"][1]
+        critical = int(held["rows"][np.argmax(strain_measure(Tbar))])
+    else:                                 # at a breakpoint, or a multiple of one from rest
+        critical = int(elements[i1])
+    return PathLimit(hit, e_bp, critical, float(strain_measure(hit.interpolate(E)).max()))
 
 
 def energy_to_limit_from_rest(energy: float, strain: float, e_L: float) -> float:

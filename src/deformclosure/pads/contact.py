@@ -164,8 +164,9 @@ class PadContact(BoundaryCompliance):
     (:meth:`BoundaryCompliance.axis_gauge`); grasp energies for any axis and pad.
 
     It also keeps the mesh's strain data, built on first use: the element
-    strain-displacement matrices and the critical-distance averaging operator of each
-    ``ℓ`` — a plan evaluates the elastic limit of hundreds of axes on the same mesh.
+    strain-displacement matrices, and (with the mesh) the critical-distance averages of
+    each ``ℓ`` (:func:`~deformclosure.elasticity.critical_distance.disc_average`) — a plan
+    evaluates the elastic limit of hundreds of axes on the same mesh.
 
     Parameters
     ----------

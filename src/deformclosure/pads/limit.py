@@ -12,9 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..elasticity.critical_distance import averaged_strains, critical_distance_of
+from ..elasticity.critical_distance import (averaged_strain_maximum, averaged_strains,
+                                            critical_distance_of, disc_average)
 from ..errors import GraspError
-from ..landscape.limit import first_limit_crossing, strain_measure
+from ..landscape.limit import first_limit_crossing, path_elastic_limit, strain_measure
 from .contact import GraspCurve, PadContact
 
 __all__ = ["PadLimit", "pad_elastic_limit", "pad_strain_at", "critical_distance_of",
@@ -80,26 +81,31 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     ell : float, optional
         Critical distance (m); default from the material (2 % of the diameter).
     operator : sparse matrix, optional
-        Averaging operator for ``ell``; default the solver's own, built once per mesh and
-        ``ell`` (:meth:`PadContact.averaging_operator`).
+        Averaging operator for ``ell`` (:func:`~deformclosure.elasticity.averaging_operator`),
+        applied to every element; by default only the discs that can hold the limit are
+        averaged (:func:`~deformclosure.landscape.limit.path_elastic_limit`, the same
+        numbers without the operator's ``m`` × disc-size memory).
     """
     mesh = solver.mesh
     ell = critical_distance_of(mesh) if ell is None else ell
-    A = solver.averaging_operator(ell) if operator is None else operator
     path = curve.path
     F = np.column_stack([solver.load_vector(curve, l) for l in path.lam])
     E = solver.element_strains(solver.displacement(F))           # (k, m, 3)
-    Ebar = averaged_strains(mesh, E, None, operator=A)
-    e_bp = strain_measure(Ebar).max(axis=1)
-    hit = first_limit_crossing(Ebar, e_L)          # the one rule (landscape.limit)
+    if operator is None:            # the one rule (landscape.limit), on the discs it needs
+        lim = path_elastic_limit(disc_average(mesh, ell), E, e_L)
+        hit, e_bp, elem, e_max = lim.crossing, lim.e_breakpoints, lim.critical_element, \
+            lim.element_max
+    else:                           # a given operator: the rule on every averaged element
+        Ebar = averaged_strains(mesh, E, None, operator=operator)
+        e_bp = strain_measure(Ebar).max(axis=1)
+        hit = first_limit_crossing(Ebar, e_L)
+        at = hit.interpolate(Ebar) if hit.reached else Ebar[-1]
+        elem = int(np.argmax(strain_measure(at)))
+        e_max = float(strain_measure(hit.interpolate(E) if hit.reached else E[-1]).max())
     if not hit.reached:
-        j = len(e_bp) - 1
-        elem = int(np.argmax(strain_measure(Ebar[j])))
-        return PadLimit(curve.sigma_end, ell, elem, e_bp, float(strain_measure(E[j]).max()))
+        return PadLimit(curve.sigma_end, ell, elem, e_bp, e_max)
     delta = float(hit.interpolate(path.delta))
-    Tbar, T = hit.interpolate(Ebar), hit.interpolate(E)
-    return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell,
-                    int(np.argmax(strain_measure(Tbar))), e_bp, float(strain_measure(T).max()))
+    return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell, elem, e_bp, e_max)
 
 
 def pad_strain_at(solver: PadContact, curve: GraspCurve, sigma: float,
@@ -113,6 +119,5 @@ def pad_strain_at(solver: PadContact, curve: GraspCurve, sigma: float,
     lam = curve.path.multipliers(curve.delta(sigma))
     u = solver.displacement(solver.load_vector(curve, lam))
     E = solver.element_strains(u[:, None])[0]
-    Ebar = averaged_strains(mesh, E, None, operator=solver.averaging_operator(ell))
-    return float(strain_measure(Ebar).max(initial=0.0))
+    return float(averaged_strain_maximum(mesh, E, ell))
 
