@@ -141,14 +141,16 @@ def atomic_path(path: str | Path, what: str = "output") -> Iterator[Path]:
 def _open_stream(path: Path, what: str) -> int:
     """A blocking write descriptor of the device or FIFO ``path``, opened without blocking:
     a FIFO without a reader is retried for :data:`STREAM_OPEN_WAIT` s, then refused."""
-    flags = os.O_WRONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+    nonblock = getattr(os, "O_NONBLOCK", 0)             # POSIX; Windows has no FIFOs
+    flags = os.O_WRONLY | nonblock | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
     deadline = time.monotonic() + STREAM_OPEN_WAIT
     while True:
         try:
             fd = os.open(path, flags)
             break
         except OSError as err:
-            if err.errno != errno.ENXIO or not stat.S_ISFIFO(os.stat(path).st_mode):
+            # ENXIO on a FIFO: no process has it open for reading (yet)
+            if err.errno != errno.ENXIO or not _is_fifo(path):
                 raise DeformClosureError(f"{path}: cannot write {what} "
                                          f"({err.strerror or err})") from None
             if time.monotonic() >= deadline:
@@ -157,8 +159,16 @@ def _open_stream(path: Path, what: str) -> int:
                     f"{STREAM_OPEN_WAIT:g} s; start the reader first, or give a file name "
                     f"for the {what}") from None
             time.sleep(0.02)
-    os.set_blocking(fd, True)              # the reader sets the pace from now on
+    if nonblock:
+        os.set_blocking(fd, True)          # the reader sets the pace from now on
     return fd
+
+
+def _is_fifo(path: Path) -> bool:
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        return False
 
 
 def _write_stream(src: Path, path: Path, what: str) -> None:
