@@ -97,6 +97,26 @@ SUBPROCESS = [
 ]
 
 
+def _required_cases() -> dict[str, tuple[str, str, str]]:
+    """Every required option of every command, each left out: ``{id: (command, input,
+    flag)}`` — from the option table (``check``/``slice`` ``--fingers``, ``import -o``),
+    and ``batch -o`` (a click option of its own)."""
+    from deformclosure.reports.options import OPTIONS
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    inputs = {"import": ex / "drawings" / "gasket.dxf", "batch": ex}
+    cases = {f"{cmd} without {o.flags[-1]}": (cmd, str(inputs.get(cmd, ex / "rectangle.json")),
+                                              o.flags[-1])
+             for cmd, table in OPTIONS.items() for o in table if o.required}
+    cases["batch without --output"] = ("batch", str(inputs["batch"]), "--output")
+    return cases
+
+
+#: Missing required options (issue 23: ``check part.json`` without ``--fingers`` was a
+#: TypeError traceback): through a fresh interpreter, one usage line and exit code 2.
+REQUIRED = _required_cases()
+
+
 def _script() -> list[str]:
     """The installed ``deformclosure`` console script, else ``python -m deformclosure``."""
     exe = Path(sys.executable).with_name("deformclosure")
@@ -122,6 +142,9 @@ def _start_background_runs():
     for name in SUBPROCESS:
         jobs[name] = [sys.executable, "-m", "deformclosure", "mesh", str(BAD / name),
                       "-o", str(tmp / f"{name}.out.json")]
+
+    for name, (cmd, inp, _) in REQUIRED.items():
+        jobs[name] = [sys.executable, "-m", "deformclosure", cmd, inp]
 
     def run(cmd):
         return subprocess.run(cmd, capture_output=True, text=True, cwd=tmp, env=env, timeout=900)
@@ -167,6 +190,17 @@ def test_bad_input_subprocess(runs, name):
     _assert_one_error_line(proc.stderr, EXPECTED[name])
     assert proc.stdout == ""
     assert not (runs["tmp"] / f"{name}.out.json").exists()
+
+
+@pytest.mark.late
+@pytest.mark.parametrize("name", sorted(REQUIRED))
+def test_a_missing_required_option_is_one_usage_line(runs, name):
+    assert len(REQUIRED) >= 4 and "check without --fingers" in REQUIRED
+    proc = runs[name]
+    flag = REQUIRED[name][2]
+    assert proc.returncode == 2, proc.stderr
+    _assert_one_error_line(proc.stderr, rf"{flag}: required for |[Mm]issing option .*{flag}")
+    assert proc.stdout == ""
 
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))

@@ -102,7 +102,7 @@ def _write_mesh(path: str | Path, points: np.ndarray, cells: list, **data) -> No
     from .outputs import atomic_path
 
     try:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, "fields") as tmp:
             meshio.write_points_cells(tmp, points, cells, **data)
     except OSError as err:
         raise DeformClosureError(f"--export-fields {path}: cannot write ({err.strerror})") from None

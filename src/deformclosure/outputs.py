@@ -1,17 +1,33 @@
-"""Writing output files so that a kill, a crash or a full disk never destroys a good one.
+"""Writing output files so that a kill, a crash or a full disk never destroys a good one,
+and a device or a FIFO given as the output is written to, never replaced.
 
-Every writer of the package (JSON reports, meshes, plots, slices, CSV) writes into a
-temporary file in the target's own folder and renames it onto the target only when the
-write has succeeded: ``os.replace`` is atomic on POSIX and Windows, so the target is at
-any moment either the previous file or the complete new one.
+Every writer of the package (JSON reports, meshes, plots, fields, slices, CSV) goes
+through :func:`atomic_path`, the one output-opening rule (:func:`output_target`):
+
+- a regular file, or a name that does not exist yet: the writer writes into a temporary
+  file in the target's own folder, renamed onto the target only when the write has
+  succeeded (``os.replace`` is atomic on POSIX and Windows, so the target is at any
+  moment either the previous file or the complete new one);
+- an existing character or block device or FIFO (``/dev/null``, ``/dev/stdout``, a named
+  pipe): the finished content is written *into* it, in place, through a non-blocking
+  open that waits at most :data:`STREAM_OPEN_WAIT` seconds for a FIFO's reader; a full
+  device (``ENOSPC``) or a FIFO nobody reads is one line naming the target;
+- a folder or a socket: refused with one line;
+- a symbolic link: followed to what it names, which the same rule is applied to (the
+  link itself is kept).
+
+Nothing is ever renamed over a file that is not regular.
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
+import stat
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, Iterator
@@ -19,15 +35,92 @@ from typing import Any, Iterator
 from .errors import DeformClosureError
 
 __all__ = ["atomic_path", "write_text_atomic", "check_outputs", "json_safe", "json_text",
-           "write_json"]
+           "write_json", "output_target", "STREAM_OPEN_WAIT"]
+
+#: Longest wait (s) for a process to open a FIFO output for reading.
+STREAM_OPEN_WAIT = 1.5
+
+
+def output_target(path: str | Path) -> tuple[str, Path]:
+    """What writing to ``path`` means: the kind of target and the path to write.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output as given (symbolic links are followed).
+
+    Returns
+    -------
+    kind : {"file", "stream"}
+        ``"file"``: a regular file or a missing one, replaced atomically; ``"stream"``: an
+        existing character or block device or FIFO, written in place.
+    where : Path
+        ``"file"``: the real path (links resolved; a link to a missing file names the file
+        to create); ``"stream"``: ``path`` itself (the kernel follows the links, which
+        also keeps ``/dev/stdout`` meaning this process's standard output).
+
+    Raises
+    ------
+    DeformClosureError
+        A folder, a socket or another kind of file, or a path that cannot be examined
+        (a loop of links, a file in its parent chain).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     output_target(pathlib.Path(d) / "new.json")[0]
+    'file'
+    >>> output_target("/dev/null")
+    ('stream', PosixPath('/dev/null'))
+    """
+    p = Path(path)
+    try:
+        mode = os.stat(p).st_mode
+    except (FileNotFoundError, NotADirectoryError):   # to be created (or refused later)
+        return "file", Path(os.path.realpath(p))
+    except OSError as err:
+        raise DeformClosureError(f"{path}: cannot write there "
+                                 f"({err.strerror or err}); give another output file") from None
+    if stat.S_ISREG(mode):
+        return "file", Path(os.path.realpath(p))
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) or stat.S_ISFIFO(mode):
+        return "stream", p
+    if stat.S_ISDIR(mode):
+        raise DeformClosureError(f"{path}: is a folder; give a file name for the output")
+    kind = "a socket" if stat.S_ISSOCK(mode) else "not a regular file, device or FIFO"
+    raise DeformClosureError(f"{path}: {kind}; cannot write an output there, give a file name")
 
 
 @contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` (same suffix, so format detection still works);
-    renamed onto ``path`` when the ``with`` block succeeds, removed when it fails."""
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
+def atomic_path(path: str | Path, what: str = "output") -> Iterator[Path]:
+    """A temporary path (same suffix, so format detection still works) for the writer to
+    write ``path``'s content to; when the ``with`` block succeeds it is renamed onto a
+    regular (or missing) target, or copied into a device or FIFO (:func:`output_target`);
+    it is removed when the block fails.
+
+    Raises
+    ------
+    DeformClosureError
+        A target that cannot be written (see :func:`output_target`), and for a device or
+        FIFO: no reader within :data:`STREAM_OPEN_WAIT` s, a full device, a write error.
+    """
+    kind, target = output_target(path)
+    if kind == "stream":
+        # The content is made in the temporary folder (never beside a device, e.g. in
+        # /dev), then written into the target in one go.
+        fd, tmp = tempfile.mkstemp(prefix="deformclosure-", suffix=Path(path).suffix or ".tmp")
+        os.close(fd)
+        try:
+            yield Path(tmp)
+            _write_stream(Path(tmp), Path(path), what)
+        finally:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        return
+    folder = target.parent
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".tmp",
                                dir=folder)
     os.close(fd)
@@ -45,6 +138,55 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         raise
 
 
+def _open_stream(path: Path, what: str) -> int:
+    """A blocking write descriptor of the device or FIFO ``path``, opened without blocking:
+    a FIFO without a reader is retried for :data:`STREAM_OPEN_WAIT` s, then refused."""
+    nonblock = getattr(os, "O_NONBLOCK", 0)             # POSIX; Windows has no FIFOs
+    flags = os.O_WRONLY | nonblock | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
+    deadline = time.monotonic() + STREAM_OPEN_WAIT
+    while True:
+        try:
+            fd = os.open(path, flags)
+            break
+        except OSError as err:
+            # ENXIO on a FIFO: no process has it open for reading (yet)
+            if err.errno != errno.ENXIO or not _is_fifo(path):
+                raise DeformClosureError(f"{path}: cannot write {what} "
+                                         f"({err.strerror or err})") from None
+            if time.monotonic() >= deadline:
+                raise DeformClosureError(
+                    f"{path}: a FIFO that no process opened for reading within "
+                    f"{STREAM_OPEN_WAIT:g} s; start the reader first, or give a file name "
+                    f"for the {what}") from None
+            time.sleep(0.02)
+    if nonblock:
+        os.set_blocking(fd, True)          # the reader sets the pace from now on
+    return fd
+
+
+def _is_fifo(path: Path) -> bool:
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def _write_stream(src: Path, path: Path, what: str) -> None:
+    """Write the whole of ``src`` into the device or FIFO ``path``; one-line errors."""
+    fd = _open_stream(path, what)
+    try:
+        with open(src, "rb") as fh:
+            while chunk := fh.read(1 << 16):
+                view = memoryview(chunk)
+                while view:
+                    view = view[os.write(fd, view):]
+    except OSError as err:                 # ENOSPC (a full device), EPIPE (reader gone), ...
+        raise DeformClosureError(f"{path}: cannot write {what} "
+                                 f"({err.strerror or err})") from None
+    finally:
+        os.close(fd)
+
+
 def _mode_for(target: Path) -> int:
     """The target's current permissions, or those a new file gets under the umask."""
     try:
@@ -58,7 +200,7 @@ def _mode_for(target: Path) -> int:
 def write_text_atomic(path: str | Path, text: str, what: str = "file") -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically; one-line error on failure."""
     try:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, what) as tmp:
             tmp.write_text(text, encoding="utf-8")
     except OSError as err:
         raise DeformClosureError(f"{path}: cannot write {what} ({err.strerror or err})") from None
@@ -136,12 +278,13 @@ def check_outputs(files: list, folders: list = (), inputs: list = ()) -> None:
         if f is None or str(f) == "-":
             continue
         p = Path(f)
-        if p.is_dir():
-            raise DeformClosureError(f"{f}: is a folder; give a file name for the output")
+        kind, where = output_target(p)      # refuses a folder or a socket
         if any(_same_file(p, i) for i in ins):
             raise DeformClosureError(f"{f}: is an input of this command; write the output to "
                                      "another file")
-        parent = p.parent if str(p.parent) else Path(".")
+        if kind == "stream":                # written in place: its folder is not written
+            continue
+        parent = where.parent
         if not parent.is_dir():
             raise DeformClosureError(f"{f}: folder {parent} does not exist; create it first")
         if not os.access(parent, os.W_OK | os.X_OK):

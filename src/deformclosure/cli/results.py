@@ -56,7 +56,8 @@ def command(db, fmt, status, output) -> int:
         click.echo(text.rstrip("\n"), file=common.REPORT_STDOUT if output == "-" else None)
         return 0
     try:
-        with atomic_path(output) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        with atomic_path(output, "results") as tmp, \
+                open(tmp, "w", encoding="utf-8", newline="") as fh:
             fh.write(text if text.endswith("\n") else text + "\n")
     except OSError as err:
         raise BatchError(f"{output}: cannot write ({err.strerror})") from None

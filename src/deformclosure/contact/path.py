@@ -224,7 +224,10 @@ def _trace(W, g0, b, e, delta_max, gap_tol, max_pieces):  # pragma: no cover - c
         reg += W[i, i]
     reg *= 1e-13 / max(m, 1)
     for _ in range(max_pieces):
-        if delta >= delta_max:
+        # done at delta_max, to rounding: the last step's end can fall a few ulps short,
+        # and a degenerate contact set there can then only take zero-length steps
+        # (max_pieces of them, each a full QP: hours on a large mesh)
+        if delta >= delta_max or delta_max - delta <= 1e-11 * abs(delta_max):
             break
         g = g0 - delta * b + W @ lam + e * t
         lam_scale = 1e-300

@@ -107,15 +107,15 @@ class SliceResult:
 
     def save(self, path: str | Path) -> None:
         """Write ``.npz`` (arrays) or ``.json`` (:meth:`to_dict`), chosen by the suffix."""
-        from ..outputs import atomic_path, write_json
+        from ..outputs import atomic_path, output_target, write_json
 
         path = Path(path)
         if path.suffix.lower() == ".json":
             write_json(path, self.to_dict(), "slice", indent=None)
             return
-        if path.suffix.lower() != ".npz":
+        if path.suffix.lower() != ".npz" and output_target(path)[0] == "file":
             path = path.with_name(path.name + ".npz")      # what numpy would write
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        with atomic_path(path, "slice") as tmp, open(tmp, "wb") as fh:
             self._save_npz(fh)
 
     def _save_npz(self, fh) -> None:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MeshError, PartError
+from ..errors import DeformClosureError, MeshError, PartError
 from ..jsonfile import InputFile, Source, check_input_file, read_json
 from ..part import Material
 from ..units import length_scale
@@ -385,10 +385,14 @@ def write_mesh(mesh: Mesh, path: str | Path) -> bool:
     keep = mesh.material is not None and path.suffix.lower() in MATERIAL_FORMATS
     cell_data = material_cell_data(mesh.material, len(mesh.triangles)) if keep else None
     try:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, "mesh file") as tmp:
             meshio.write_points_cells(tmp, np.column_stack([mesh.nodes, np.zeros(mesh.n_nodes)]),
                                       [("triangle", mesh.triangles)], cell_data=cell_data)
-    except (Exception, SystemExit) as err:  # unknown suffix, unwritable path, ...
+    except DeformClosureError:              # the target itself (outputs.atomic_path)
+        raise
+    except OSError as err:
+        raise MeshError(f"{path}: cannot write mesh file ({err.strerror or err})") from None
+    except (Exception, SystemExit) as err:  # unknown suffix, ...
         detail = " ".join(str(err).split())[:300]
         raise MeshError(f"{path}: cannot write mesh file ({detail}); use .json or a "
                         "suffix meshio knows (.vtk, .vtu, .msh, ...)") from None

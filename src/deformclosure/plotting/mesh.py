@@ -59,8 +59,10 @@ def save_figure(fig, path: str | Path) -> None:
     from ..outputs import atomic_path
 
     try:
-        with atomic_path(path) as tmp:
+        with atomic_path(path, "plot") as tmp:
             fig.savefig(tmp, dpi=150, bbox_inches="tight", format=Path(path).suffix[1:] or "png")
+    except DeformClosureError:              # the target itself (outputs.atomic_path), one line
+        raise
     except (OSError, ValueError) as err:
         raise DeformClosureError(f"{path}: cannot write plot ({err})") from None
     finally:
