@@ -115,18 +115,18 @@ def _run(name: str, rtol: float):
 
 
 @functools.lru_cache(maxsize=None)
-def _reference(name: str):
-    """The finest level of the rtol 0.05 run refined uniformly: every element's area / 4
-    (``h`` halved, its twin alike), and the landscape two levels finer (factor × 4) around
-    every saddle found, by the levels' own rule (:func:`solve_level`). (Two mesh levels,
-    area / 16, cost minutes per part and the critical-distance operator's memory grows
-    with (ℓ/h)²; the notched bar's two-level check is benchmarks/convergence_pads.py.)"""
+def _reference(name: str, area_factor: float = 4.0):
+    """The finest level of the rtol 0.05 run refined uniformly: every element's area /
+    ``area_factor`` (4: ``h`` halved; its twin alike), and the landscape two levels finer
+    (factor × 4) around every saddle found, by the levels' own rule (:func:`solve_level`).
+    Two mesh levels (16) take 13 minutes for the three parts, so they are the opt-in
+    ``tests/test_accuracy_reference.py``."""
     part, (p, q), rho = PARTS[name]
     run = _run(name, 0.05)
     mesh = run.finest.solver.mesh
-    default = float(mesh.areas.max()) / 4.0
+    default = float(mesh.areas.max()) / area_factor
     sizing = Sizing(default, points=mesh.nodes[mesh.triangles].mean(axis=1),
-                    areas=mesh.areas / 4.0)
+                    areas=mesh.areas / area_factor)
     ref_mesh = dc.mesh_part(part, max_area=default, sizing=sizing)
     twin = twin_mesh(part, max_area=default, sizing=sizing)
     return solve_level(ref_mesh, twin, _axis(p, q), Pad(0.0, rho * MM), len(run.levels) + 1,

@@ -16,33 +16,16 @@ nor ``-m slow`` runs it. Run it with::
 
 from __future__ import annotations
 
-import functools
-
 import pytest
 
-import deformclosure as dc
-from deformclosure.mesh.generate import twin_mesh
-from deformclosure.mesh.sizing import Sizing
-from deformclosure.pads import Pad
-from deformclosure.pads.refine import solve_level
-
-from test_accuracy import GRID, MM, PARTS, _axis, _quantities, _run
+from test_accuracy import PARTS, _quantities, _run
+from test_accuracy import _reference as _two_levels_finer
 
 pytestmark = pytest.mark.reference
 
 
-@functools.lru_cache(maxsize=None)
 def _reference(name: str):
-    part, (p, q), rho = PARTS[name]
-    run = _run(name, 0.05)
-    mesh = run.finest.solver.mesh
-    default = float(mesh.areas.max()) / 16.0
-    sizing = Sizing(default, points=mesh.nodes[mesh.triangles].mean(axis=1),
-                    areas=mesh.areas / 16.0)
-    ref_mesh = dc.mesh_part(part, max_area=default, sizing=sizing)
-    twin = twin_mesh(part, max_area=default, sizing=sizing)
-    return solve_level(ref_mesh, twin, _axis(p, q), Pad(0.0, rho * MM), len(run.levels) + 1,
-                       list(run.saddles), None, GRID)
+    return _two_levels_finer(name, 16.0)
 
 
 def test_error_estimates_bound_the_difference_to_a_reference_two_levels_finer():
