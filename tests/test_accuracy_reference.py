@@ -18,29 +18,11 @@ from __future__ import annotations
 
 import pytest
 
-from test_accuracy import PARTS, _quantities, _run
-from test_accuracy import _reference as _two_levels_finer
+from test_accuracy import bracketing_failures
 
 pytestmark = pytest.mark.reference
 
 
-def _reference(name: str):
-    return _two_levels_finer(name, 16.0)
-
-
 def test_error_estimates_bound_the_difference_to_a_reference_two_levels_finer():
-    checked, failures = 0, []
-    for name in PARTS:
-        ref = _quantities(_reference(name))
-        assert ref["quality"] > 0, name
-        for rtol in (0.2, 0.1, 0.05):
-            run = _run(name, rtol)
-            err, val = run.error_estimate(), _quantities(run.finest)
-            for key in ("quality", "U_A", "sigma_star"):
-                checked += 1
-                e = err[key]
-                print(f"{name:20} rtol {rtol:<4} {key:10} {val[key]:.6g} ± {e:.3g}  "
-                      f"reference {ref[key]:.6g}")           # the table, with -s
-                if e is None or abs(val[key] - ref[key]) > e:
-                    failures.append((name, rtol, key, val[key], ref[key], e))
+    checked, failures = bracketing_failures(16.0)
     assert len(failures) <= 0.1 * checked, failures

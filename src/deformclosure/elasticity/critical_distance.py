@@ -301,6 +301,13 @@ def _stack(mesh_m: int, strains: np.ndarray) -> np.ndarray:
     return e
 
 
+def _as_stack(mesh_m: int, strains: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Checked ``strains`` as a stack ``(k, m, 3)`` and whether one field ``(m, 3)`` was
+    given (the caller returns its single result unstacked)."""
+    e = _stack(mesh_m, strains)
+    return (e, False) if e.ndim == 3 else (e[None], True)
+
+
 class DiscAverage:
     """The critical-distance averages of one mesh and ``ℓ``, row by row (SPEC §6).
 
@@ -482,8 +489,7 @@ class DiscAverage:
         MeshError
             If ``strains`` do not fit the mesh.
         """
-        e = _stack(self.m, strains)
-        E = e if e.ndim == 3 else e[None]
+        E, single = _as_stack(self.m, strains)
         rows = np.arange(self.m) if rows is None else np.asarray(rows, np.int64).ravel()
         out = np.empty((len(E), len(rows), 3))
         if self.ell == 0.0:
@@ -497,7 +503,7 @@ class DiscAverage:
             for part in self._chunks(rows[rest]):
                 out[:, rest[part]] = self._products(self.operator_rows(rows[rest[part]]), E,
                                                     every)
-        return out if e.ndim == 3 else out[0]
+        return out[0] if single else out
 
     def _products(self, W: sp.csr_matrix, E: np.ndarray, fields: np.ndarray) -> np.ndarray:
         """``W @ E[f]`` for every ``f`` in ``fields``, shape ``(len(fields), r, 3)``.
@@ -547,8 +553,7 @@ class DiscAverage:
         MeshError
             If ``strains`` do not fit the mesh.
         """
-        e = _stack(self.m, strains)
-        E = e if e.ndim == 3 else e[None]
+        E, single = _as_stack(self.m, strains)
         k = len(E)
         best = np.full(k, -1.0)
         arg = np.zeros(k, np.int64)
@@ -556,7 +561,7 @@ class DiscAverage:
             for f in range(k):
                 v = _magnitudes(E[f])
                 best[f], arg[f] = v.max(), v.argmax()
-            return (best, arg) if e.ndim == 3 else (float(best[0]), int(arg[0]))
+            return (float(best[0]), int(arg[0])) if single else (best, arg)
         s = min(SEED_ROWS, self.m)
         ncells = self._grid_shape[0] * self._grid_shape[1]
         cellmax = np.zeros((k, ncells))
@@ -625,7 +630,7 @@ class DiscAverage:
         # an all-zero average: numpy's argmax is the first element
         zero = finite & (best <= 0)
         arg[zero], best[zero] = 0, 0.0
-        return (best, arg) if e.ndim == 3 else (float(best[0]), int(arg[0]))
+        return (float(best[0]), int(arg[0])) if single else (best, arg)
 
     def candidates(self, magnitudes: np.ndarray, level: float) -> np.ndarray:
         """Elements whose disc average may reach ``level``: those whose :meth:`bound` of
