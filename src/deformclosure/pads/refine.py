@@ -444,15 +444,21 @@ def check_accuracy(rtol, max_seconds) -> None:
                              "seconds > 0")
 
 
+def check_refine(refine) -> None:
+    """Refuse a ``--refine`` that is not a whole number of meshes from 1 to 5
+    (``None``: not given)."""
+    if refine is not None and (isinstance(refine, bool) or not (isinstance(refine, int)
+                                                                and 1 <= refine <= 5)):
+        raise GraspError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
+
+
 def _check_request(part, axis, pad, refine, rtol, max_seconds, options: dict) -> None:
     """Refuse a bad ``refine``, ``rtol``, ``max_seconds``, ``axis``, ``pad`` or option of
     :func:`pad_grasp`."""
     if refine is not None and rtol is not None:
         raise GraspError("--refine and --rtol: give one (--refine N solves N uniform levels; "
                          "--rtol R refines until the error estimate is within R)")
-    if refine is not None and (isinstance(refine, bool) or not (isinstance(refine, int)
-                                                                and 1 <= refine <= 5)):
-        raise GraspError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
+    check_refine(refine)
     check_accuracy(rtol, max_seconds)
     if not isinstance(axis, GraspAxis):
         raise GraspError(f"axis = {axis!r}: give a GraspAxis (angle in rad, offset in m)")

@@ -47,15 +47,12 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     from ..dspace.fingers import load_fingers
     from ..pads.size_limits import check_pads_size
 
-    from ..pads.refine import check_accuracy
+    from ..pads.refine import check_accuracy, check_refine
 
     p = params
     _check_params(p)
     check_accuracy(p.get("rtol"), p.get("max_seconds"))
-    refine = p.get("refine")
-    if refine is not None and (isinstance(refine, bool) or not (isinstance(refine, int)
-                                                                and 1 <= refine <= 5)):
-        raise DeformClosureError(f"--refine = {refine!r}: give a whole number of meshes from 1 to 5")
+    check_refine(p.get("refine"))
     fsrc = source_of(p["fingers"], "finger file")
     fingers = load_fingers(fsrc)
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
