@@ -311,3 +311,61 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
             if split:
                 break
     return (None if best is None else (best.Q, best.x)), ev
+
+
+def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_samples: int,
+                     rtol: float, x_tol: float) -> tuple[float, float] | None:
+    """``argmax Q`` on ``[lo, hi]`` for a ``Q`` known only by evaluation (SPEC §8: the
+    finite-strain energies are smooth between contact events, not piecewise quadratic).
+
+    ``n_samples`` evenly spaced values of ``x`` (the ends included) locate the best
+    sample; the bracket of its two neighbours is then halved around the best point (both
+    half-way points evaluated, the best of the three kept) until the bracket is narrower
+    than ``x_tol`` or the best value has moved by less than ``rtol / 4`` (relative)
+    in two successive halvings. Samples
+    rank by :func:`better` (larger ``Q``, then ``toward`` the upper end, the least
+    squeeze).
+
+    Parameters
+    ----------
+    quality : callable
+        ``x → Q`` (J); ``x`` in m.
+    lo, hi : float
+        The range (m), ``lo < hi``.
+    n_samples : int
+        At least 3.
+    rtol : float
+        Relative accuracy of ``Q*`` to locate.
+    x_tol : float
+        Bracket width (m) at which the search stops regardless.
+
+    Returns
+    -------
+    (Q*, x*) or None
+        ``None`` when ``Q ≤ 0`` at every sample (no barrier on the range).
+    """
+    xs = np.linspace(lo, hi, max(int(n_samples), 3))
+    best: Candidate | None = None
+    k_best = 0
+    for k, x in enumerate(xs):
+        c = Candidate(float(quality(float(x))), float(x), True)
+        if better(c, best):
+            best, k_best = c, k
+    if best is None or not best.Q > 0:
+        return None
+    a = float(xs[max(k_best - 1, 0)])
+    b = float(xs[min(k_best + 1, len(xs) - 1)])
+    stable = 0
+    while b - a > x_tol:
+        prev = best.Q
+        for x in (0.5 * (a + best.x), 0.5 * (best.x + b)):
+            if a < x < b and x != best.x:
+                c = Candidate(float(quality(x)), x, True)
+                if better(c, best):
+                    best = c
+        half = 0.25 * (b - a)
+        a, b = max(a, best.x - half), min(b, best.x + half)
+        stable = stable + 1 if abs(best.Q - prev) <= 0.25 * rtol * abs(best.Q) else 0
+        if stable >= 2:
+            break
+    return best.Q, best.x

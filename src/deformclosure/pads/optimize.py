@@ -73,6 +73,9 @@ class PadGraspResult:
     saddle : GraspAxis or None
         The escape path's highest axis at σ* (``None`` without a finite barrier): where
         the next level refines the landscape.
+    escape_vertices : tuple of int
+        The escape path as vertices of ``grid`` (the finite-strain model re-solves them,
+        SPEC §8).
     strain_at_sigma_star : float or None
         The strain measure of SPEC §6 at σ* (dimensionless); above
         :data:`~deformclosure.pads.limit.LINEAR_STRAIN_RANGE` a warning says that linear
@@ -103,6 +106,7 @@ class PadGraspResult:
     warnings: tuple[str, ...] = ()
     solver: PadContact | None = field(default=None, repr=False, compare=False)
     saddle: GraspAxis | None = None
+    escape_vertices: tuple[int, ...] = ()
 
     @property
     def force(self) -> float | None:
@@ -301,7 +305,7 @@ def optimize_pads(mesh, axis: GraspAxis, pad: Pad, *, solver: PadContact | None 
         strain_at_sigma_star=strain, blind=mesh_is_blind(mesh, pad, hole),
         warnings=_resolution_warnings(mesh, pad, hole) + _range_warnings(strain)
         + _contact_size_warnings(mesh, contacts, pad, limit.critical_distance), solver=solver,
-        saddle=saddle)
+        saddle=saddle, escape_vertices=tuple(rel.path) if barrier else ())
 
 
 def _landscape(solver: PadContact, axis: GraspAxis, pad: Pad, start_curve: GraspCurve,

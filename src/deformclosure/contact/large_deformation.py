@@ -1,0 +1,416 @@
+"""Frictionless contact of rigid capsules with a part at finite strain (SPEC §8).
+
+At one position of the rigid bodies the part's displacement ``u`` (m, DOFs
+``[x0, y0, x1, y1, …]``) solves
+
+    min Ψ(u)   subject to   g_j(u) = dist(X_j + u_j, body_j) ≥ 0   and   G u = 0,
+
+with ``Ψ`` the stored energy of any material law that gives its energy, gradient and
+tangent (:class:`deformclosure.elasticity.neohookean.NeoHookean`, or the linear law
+:class:`deformclosure.elasticity.linear_energy.LinearEnergy`), ``g_j`` the *exact*
+signed distance of boundary node ``j``'s current position to a rigid capsule (no
+linearisation: sliding along a round pad and contact on its flanks are right at any
+squeeze) and ``G`` the gauge's linear functionals (SPEC §6/§8: mean cross-axis
+displacement and mean rotation ω on a grasp axis). The stationarity conditions
+
+    ∇Ψ(u) − Σ_j λ_j ∇g_j(u) − Gᵀ μ = 0,   G u = 0,   λ ≥ 0, g ≥ 0, λ_j g_j = 0
+
+are solved by a primal–dual active-set Newton method (Hintermüller, Ito & Kunisch,
+SIAM J. Optim. 13 (2003), the semismooth Newton method for ``min(λ, c g) = 0``) with a
+backtracking line search on the residual; ``λ_j`` is the normal force (N) of row ``j``
+(its direction ``∇g_j``, unit: frictionless). Each Newton step solves one sparse KKT
+system of the tangent ``K_T − Σ λ_j ∇²g_j`` (the second term: the curvature of the pad's
+surface under a sliding node), the active rows and the gauge, by SuperLU.
+
+:func:`follow_squeeze` follows a one-parameter family of body positions (the squeeze δ)
+from first touch in steps, halving a step whose Newton iteration does not converge, and
+reports the squeeze it could not reach instead of clipping.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Protocol, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["CapsuleObstacle", "ContactState", "FiniteStrainContact", "SqueezePath",
+           "follow_squeeze", "RESIDUAL_TOL"]
+
+#: Relative residual at which a Newton solve has converged (SPEC §8: ≤ 1e-10).
+RESIDUAL_TOL = 1e-10
+#: Newton iterations per solve before the step is halved.
+MAX_NEWTON = 30
+#: Iterations without halving the best residual after which a solve gives up (the step is
+#: halved instead: an active set that cycles is cured by a smaller step).
+STALL = 6
+#: Halvings of a squeeze step before the squeeze is reported as not reached.
+MAX_HALVINGS = 8
+
+
+class Material(Protocol):  # pragma: no cover - a protocol
+    """What the solver needs of a material law (SI: J, N, N/m)."""
+
+    n_dofs: int
+
+    def energy(self, u: np.ndarray) -> float: ...
+
+    def gradient(self, u: np.ndarray) -> np.ndarray: ...
+
+    def energy_gradient_tangent(self, u: np.ndarray) -> tuple[float, np.ndarray, sp.csr_matrix]: ...
+
+
+@dataclass(frozen=True)
+class CapsuleObstacle:
+    """A rigid capsule: the segment ``p → q`` (m) swept by a disc of ``radius`` (m).
+
+    ``p == q`` is a disc. The signed distance of a point ``x`` is ``|x − c(x)| − radius``
+    with ``c(x)`` the segment's point nearest ``x``; its gradient is the unit vector from
+    ``c(x)`` to ``x`` (the direction of the force the capsule exerts), and its Hessian is
+    ``(I − n nᵀ)/|x − c(x)|`` where ``c(x)`` is an end of the segment and ``0`` along the
+    straight face.
+    """
+
+    p: tuple[float, float]
+    q: tuple[float, float]
+    radius: float
+
+    def distance(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Signed distances (m), unit gradients and Hessians (1/m) at points ``X`` (k, 2).
+
+        Returns
+        -------
+        g : ndarray, shape (k,)
+        n : ndarray, shape (k, 2)
+        H : ndarray, shape (k, 2, 2)
+        """
+        X = np.asarray(X, float)
+        p, q = np.asarray(self.p, float), np.asarray(self.q, float)
+        e = q - p
+        L2 = float(e @ e)
+        if L2 > 0:
+            t = np.clip(((X - p) @ e) / L2, 0.0, 1.0)
+        else:
+            t = np.zeros(len(X))
+        c = p + t[:, None] * e
+        r = X - c
+        dist = np.hypot(r[:, 0], r[:, 1])
+        safe = np.where(dist > 0, dist, 1.0)
+        n = r / safe[:, None]
+        g = dist - self.radius
+        # Along the face (0 < t < 1) the distance is the distance to a line: no curvature.
+        end = (t <= 0.0) | (t >= 1.0) if L2 > 0 else np.ones(len(X), bool)
+        k = np.where(end, 1.0 / safe, 0.0)
+        H = k[:, None, None] * (np.eye(2)[None] - n[:, :, None] * n[:, None, :])
+        return g, n, H
+
+
+@dataclass
+class ContactState:
+    """A converged (or last) iterate of one contact solve.
+
+    Attributes
+    ----------
+    u : ndarray, shape (2n,)
+        Displacement (m).
+    lam : ndarray, shape (r,)
+        Normal force (N) of every candidate row; 0 off contact.
+    mu : ndarray, shape (k,)
+        Gauge multipliers (N, or N·m for a rotation functional): the load the gauge carries.
+    energy : float
+        Stored energy Ψ(u) (J).
+    gaps : ndarray, shape (r,)
+        Signed distances (m) of the rows at ``u``.
+    normals : ndarray, shape (r, 2)
+        Unit gradients of the gaps: the direction of each row's force on the part.
+    residual : float
+        Relative residual of the stationarity and complementarity conditions.
+    iterations : int
+    converged : bool
+    """
+
+    u: np.ndarray
+    lam: np.ndarray
+    mu: np.ndarray
+    energy: float
+    gaps: np.ndarray
+    normals: np.ndarray
+    residual: float
+    iterations: int
+    converged: bool
+
+    def forces(self) -> np.ndarray:
+        """Contact forces on the part (N), shape (r, 2)."""
+        return self.lam[:, None] * self.normals
+
+
+class FiniteStrainContact:
+    """The contact problem of a part (material law ``material``) with rigid capsules.
+
+    Parameters
+    ----------
+    material : Material
+        Energy, gradient and tangent of the part (the protocol of this module).
+    nodes : ndarray, shape (n, 2)
+        Reference positions (m).
+    rows : sequence of (ndarray of int, int)
+        ``(node ids, body index)`` pairs: which nodes may touch which body.
+    gauge : ndarray, shape (k, 2n)
+        Linear functionals held at zero (SPEC §6/§8 gauge).
+    length : float
+        A length scale of the part (m, its diameter) for the gap tolerance.
+    """
+
+    def __init__(self, material: Material, nodes: np.ndarray,
+                 rows: Sequence[tuple[np.ndarray, int]], gauge: np.ndarray,
+                 length: float) -> None:
+        self.material = material
+        self.X = np.asarray(nodes, float)
+        self.n_dofs = 2 * len(self.X)
+        ids = [np.asarray(r[0], np.int64) for r in rows]
+        self.node = np.concatenate(ids) if ids else np.zeros(0, np.int64)
+        self.body = np.concatenate([np.full(len(i), r[1], np.int64) for i, r in zip(ids, rows)]) \
+            if ids else np.zeros(0, np.int64)
+        self.G = sp.csr_matrix(np.asarray(gauge, float))
+        self.length = float(length)
+        self.gap_tol = RESIDUAL_TOL * self.length
+        dofs = np.column_stack([2 * self.node, 2 * self.node + 1]).ravel()
+        self._dofs = dofs
+
+    # -------------------------------------------------------------------- geometry
+    def gaps(self, u: np.ndarray, bodies: Sequence[CapsuleObstacle]
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Signed distances (m), unit normals and Hessians (1/m) of every row at ``u``."""
+        x = self.X[self.node] + u.reshape(-1, 2)[self.node]
+        r = len(self.node)
+        g, n, H = np.empty(r), np.empty((r, 2)), np.empty((r, 2, 2))
+        for b, body in enumerate(bodies):
+            sel = self.body == b
+            if sel.any():
+                g[sel], n[sel], H[sel] = body.distance(x[sel])
+        return g, n, H
+
+    # -------------------------------------------------------------------- one solve
+    def solve(self, bodies: Sequence[CapsuleObstacle], u0: np.ndarray | None = None,
+              lam0: np.ndarray | None = None, mu0: np.ndarray | None = None,
+              force_scale: float | None = None) -> ContactState:
+        """Equilibrium with the bodies at their given positions, from ``(u0, lam0, mu0)``.
+
+        Parameters
+        ----------
+        bodies : sequence of CapsuleObstacle
+        u0, lam0, mu0 : ndarray, optional
+            Start (default zero); a converged state of a nearby body position is best.
+        force_scale : float, optional
+            Force (N) the residual is relative to; default the largest of the contact and
+            internal forces of the iterate.
+
+        Returns
+        -------
+        ContactState
+            ``converged`` False when the iteration did not reach :data:`RESIDUAL_TOL`
+            within :data:`MAX_NEWTON` steps.
+        """
+        nd, r, k = self.n_dofs, len(self.node), self.G.shape[0]
+        u = np.zeros(nd) if u0 is None else np.array(u0, float)
+        lam = np.zeros(r) if lam0 is None else np.array(lam0, float)
+        mu = np.zeros(k) if mu0 is None else np.array(mu0, float)
+        mat = self.material
+        E, grad, Kt = mat.energy_gradient_tangent(u)
+        g, n, H = self.gaps(u, bodies)
+        c = float(Kt.diagonal().mean())          # N/m: the scale of min(λ, c g)
+        res = self._residual(u, lam, mu, grad, g, n, c, force_scale)
+        it = 0
+        prev_active = None
+        best_res, best_it = res, 0
+        while it < MAX_NEWTON and it - best_it <= STALL:
+            active = (lam - c * g) > 0
+            if res <= RESIDUAL_TOL and prev_active is not None and np.array_equal(active, prev_active):
+                break
+            if res <= RESIDUAL_TOL and it > 0 and self._complementary(lam, g):
+                break
+            du, lam_new, mu_new = self._newton_step(u, lam, mu, grad, Kt, g, n, H, active)
+            # Backtracking on the residual (the energy may be infinite for an inverted
+            # element: such a trial is rejected).
+            alpha, accepted = 1.0, False
+            for _ in range(12):
+                ut = u + alpha * du
+                lt = lam + alpha * (lam_new - lam)
+                mt = mu + alpha * (mu_new - mu)
+                Et = mat.energy(ut)
+                if math.isfinite(Et):
+                    Et, gt_, Kt_ = mat.energy_gradient_tangent(ut)
+                    gg, nn, HH = self.gaps(ut, bodies)
+                    rt = self._residual(ut, lt, mt, gt_, gg, nn, c, force_scale)
+                    if rt < res or alpha < 1e-3 or not np.isfinite(res):
+                        accepted = True
+                        break
+                alpha *= 0.5
+            it += 1
+            if not accepted:
+                break
+            prev_active = active
+            u, lam, mu, E, grad, Kt, g, n, H, res = ut, lt, mt, Et, gt_, Kt_, gg, nn, HH, rt
+            if res < 0.5 * best_res:
+                best_res, best_it = res, it
+        lam = np.where((lam - c * g) > 0, np.maximum(lam, 0.0), 0.0)
+        converged = bool(res <= RESIDUAL_TOL and self._complementary(lam, g))
+        return ContactState(u, lam, mu, float(E), g, n, float(res), it, converged)
+
+    def _complementary(self, lam: np.ndarray, g: np.ndarray) -> bool:
+        """No row penetrates beyond the gap tolerance and no active row pulls."""
+        tol = self.gap_tol
+        on = lam > 0
+        return bool(np.all(g >= -tol) and np.all(np.abs(g[on]) <= tol) and np.all(lam >= 0))
+
+    def _residual(self, u, lam, mu, grad, g, n, c, force_scale) -> float:
+        """Relative residual: stationarity over the force scale, complementarity
+        ``min(λ, c g)`` over the same scale, the gauge over the length scale."""
+        r_u = grad - self._contact_load(lam, n) - self.G.T @ mu
+        scale = force_scale
+        if scale is None:
+            scale = max(float(np.abs(grad).max(initial=0.0)), float(np.abs(lam).max(initial=0.0)))
+        scale = max(scale, 1e-300)
+        ncp = np.minimum(lam, c * g)
+        gauge = np.abs(self.G @ u).max(initial=0.0) / self.length
+        return float(max(np.abs(r_u).max(initial=0.0) / scale,
+                         np.abs(ncp).max(initial=0.0) / scale, gauge))
+
+    def _contact_load(self, lam: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """``Σ_j λ_j ∇g_j`` (N), shape (2n,)."""
+        f = np.zeros(self.n_dofs)
+        np.add.at(f, self._dofs, (lam[:, None] * n).ravel())
+        return f
+
+    def _newton_step(self, u, lam, mu, grad, Kt, g, n, H, active):
+        """One primal–dual active-set Newton step; returns ``(Δu, λ⁺, μ⁺)``."""
+        nd = self.n_dofs
+        A = np.flatnonzero(active)
+        # Tangent minus the surface curvature under the active rows' forces.
+        blk = -(lam[A, None, None] * H[A])                       # (a, 2, 2)
+        d = self.node[A]
+        ri = np.stack([2 * d, 2 * d, 2 * d + 1, 2 * d + 1], 1).ravel()
+        ci = np.stack([2 * d, 2 * d + 1, 2 * d, 2 * d + 1], 1).ravel()
+        Hc = sp.csr_matrix((blk.reshape(-1), (ri, ci)), shape=(nd, nd))
+        Kc = (Kt + Hc).tocsr()
+        a = len(A)
+        J = sp.csr_matrix((n[A].ravel(), (np.repeat(np.arange(a), 2),
+                                          np.stack([2 * d, 2 * d + 1], 1).ravel())),
+                          shape=(a, nd))
+        G = self.G
+        k = G.shape[0]
+        lamA = np.zeros_like(lam)
+        lamA[A] = lam[A]
+        r_u = grad - self._contact_load(lamA, n) - G.T @ mu
+        KKT = sp.bmat([[Kc, -J.T, -G.T], [-J, None, None], [-G, None, None]], format="csc")
+        rhs = np.concatenate([-r_u, g[A], G @ u])
+        try:
+            sol = spla.splu(KKT, permc_spec="COLAMD", options={"SymmetricMode": False}).solve(rhs)
+        except RuntimeError:
+            # A singular system (a body with no active row leaves the float along the
+            # axis free): a proximal step regularised by a tiny multiple of the diagonal.
+            eps = 1e-10 * float(abs(Kt.diagonal()).mean())
+            reg = sp.diags(np.concatenate([np.full(nd, eps), np.full(a + k, -eps)]))
+            sol = spla.splu((KKT + reg).tocsc(), permc_spec="COLAMD").solve(rhs)
+        du = sol[:nd]
+        lam_new = np.zeros_like(lam)
+        lam_new[A] = lam[A] + sol[nd:nd + a]
+        mu_new = mu + sol[nd + a:]
+        return du, lam_new, mu_new
+
+
+@dataclass
+class SqueezePath:
+    """Converged states along a squeeze, from first touch.
+
+    Attributes
+    ----------
+    delta : ndarray
+        Squeezes (m) at which a state converged, increasing.
+    states : list of ContactState
+    reached : bool
+        Whether the last requested squeeze was reached.
+    delta_failed : float or None
+        The smallest squeeze (m) at which the solver failed (a step halved
+        :data:`MAX_HALVINGS` times without converging), ``None`` when all were reached.
+    """
+
+    delta: np.ndarray
+    states: list
+    reached: bool = True
+    delta_failed: float | None = None
+    n_solves: int = field(default=0)
+
+
+def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], list],
+                   targets: Sequence[float], start: ContactState | None = None,
+                   start_delta: float = 0.0) -> SqueezePath:
+    """Follow the contact equilibrium through the squeezes ``targets`` (m, increasing).
+
+    Each target is reached from the previous converged state in one step, halved (and
+    the halves chained) when Newton does not converge; after :data:`MAX_HALVINGS`
+    halvings the rest is reported as not reached.
+
+    Parameters
+    ----------
+    problem : FiniteStrainContact
+    bodies_at : callable
+        ``δ (m) → list of CapsuleObstacle``: the bodies' positions at squeeze δ.
+    targets : sequence of float
+        Squeezes (m) whose states are wanted, increasing, ``> start_delta``.
+    start : ContactState, optional
+        A converged state at ``start_delta`` (default: the unloaded part, ``u = 0``).
+    start_delta : float
+        Squeeze (m) of ``start``.
+
+    Returns
+    -------
+    SqueezePath
+        States at the targets reached (intermediate states of halved steps are not kept).
+    """
+    nd, r, k = problem.n_dofs, len(problem.node), problem.G.shape[0]
+    if start is None:
+        state = ContactState(np.zeros(nd), np.zeros(r), np.zeros(k), 0.0, np.zeros(r),
+                             np.zeros((r, 2)), 0.0, 0, True)
+    else:
+        state = start
+    d_now = float(start_delta)
+    out_d, out_s = [], []
+    prev: tuple[float, ContactState] | None = None
+    solves = 0
+    for target in targets:
+        target = float(target)
+        step = target - d_now
+        halvings = 0
+        while d_now < target:
+            d_try = d_now + step
+            if d_try >= target - 1e-9 * step:
+                d_try = target
+            u0 = state.u
+            if prev is not None and d_now > prev[0]:
+                # Linear predictor from the last two states (the path is smooth between
+                # contact events).
+                w = (d_try - d_now) / (d_now - prev[0])
+                u0 = state.u + w * (state.u - prev[1].u)
+            trial = problem.solve(bodies_at(d_try), u0, state.lam, state.mu)
+            solves += 1
+            if not trial.converged and u0 is not state.u:
+                trial = problem.solve(bodies_at(d_try), state.u, state.lam, state.mu)
+                solves += 1
+            if trial.converged:
+                prev = (d_now, state)
+                state, d_now = trial, d_try
+                if halvings and step < target - d_now:
+                    step *= 2.0
+                    halvings -= 1
+                continue
+            halvings += 1
+            if halvings > MAX_HALVINGS:
+                return SqueezePath(np.array(out_d), out_s, False, d_try, solves)
+            step *= 0.5
+        out_d.append(d_now)
+        out_s.append(state)
+    return SqueezePath(np.array(out_d), out_s, True, None, solves)

@@ -1,0 +1,253 @@
+"""σ*, Q*, σ_L and U_A of a pad grasp at finite strain (SPEC §8).
+
+The linear model (SPEC §6, :func:`.optimize.optimize_pads`) finds the release landscape's
+escape path and its saddle; the finite-strain model re-solves, with the exact contact
+geometry of :mod:`.large_deformation`, the start axis, the axes of that path and their grid
+neighbours, and runs the one minimax search (:class:`.landscape.Landscape`) on that
+sub-landscape. A barrier on a path found this way is an *upper bound* on the finite-strain
+barrier of the whole landscape (a path the restricted search does not see may be lower),
+and the report says so. ``U_L(σ) = U(σ_L) − U(σ)`` with ``σ_L`` where the strain measure of
+SPEC §8 reaches ``e_L``; ``σ*`` maximises ``Q = min(U_A, U_L)`` by the sampled search of
+:func:`deformclosure.landscape.optimum.maximise_sampled`, located to ``rtol``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import GraspError
+from ..landscape.optimum import maximise_sampled
+from .geometry import GraspAxis, Pad
+from .landscape import Landscape
+from .large_deformation import FiniteStrainCurve, FiniteStrainPads
+
+__all__ = ["FiniteStrainResult", "RestrictedGrid", "optimize_finite_strain",
+           "UPPER_BOUND_NOTE"]
+
+#: σ samples of the first pass of the σ*-search.
+N_SAMPLES = 12
+
+UPPER_BOUND_NOTE = ("U_A at finite strain is the barrier on the linear model's escape path "
+                    "and its grid neighbours re-solved: an upper bound on the finite-strain "
+                    "barrier (SPEC §8)")
+
+
+class RestrictedGrid:
+    """An axis grid whose neighbours are limited to the vertices ``allowed`` (the
+    sub-landscape the finite-strain model re-solves)."""
+
+    def __init__(self, grid, allowed: set[int]) -> None:
+        self.grid, self.allowed = grid, set(allowed)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.grid, name)
+
+    def neighbours(self, v: int) -> list[int]:
+        return [w for w in self.grid.neighbours(v) if w in self.allowed]
+
+    def start_neighbours(self, v: int) -> list[int]:
+        return self.grid.start_neighbours(v)
+
+
+@dataclass(frozen=True, eq=False)
+class FiniteStrainResult:
+    """A pad grasp at finite strain (SPEC §8), SI units.
+
+    Attributes
+    ----------
+    elasticity : str
+        ``"neo-hookean"`` (or ``"linear"``: the small-strain law with the exact gap).
+    linear : PadGraspResult
+        The linear model on the same mesh and grid (it found the escape path).
+    sigma0, sigma_L : float
+        First-touch width and elastic-limit separation (m).
+    sigma_L_reached : bool
+        Whether the strain reached ``e_L`` before the squeeze became unreachable.
+    sigma_star : float or None
+    quality, U_A, U_L : float
+        At σ* (J).
+    force, stiffness : float or None
+        Axial pad force (N) and ``dF/dδ`` (N/m) at σ*.
+    strain_at_sigma_star : float or None
+        SPEC §8's strain measure at σ*.
+    escape_path : list of GraspAxis
+    n_axes : int
+        Axes solved at finite strain.
+    curve : dict
+        ``{"sigma", "U", "F", "U_A", "U_L", "Q"}`` at the evaluated separations.
+    delta_unreachable : float or None
+        The smallest squeeze (m) of the start axis the solver could not reach.
+    """
+
+    elasticity: str
+    linear: Any
+    sigma0: float
+    sigma_L: float
+    sigma_L_reached: bool
+    sigma_star: float | None
+    quality: float
+    U_A: float
+    U_L: float
+    force: float | None
+    stiffness: float | None
+    strain_at_sigma_star: float | None
+    escape_path: list
+    n_axes: int
+    curve: dict
+    delta_unreachable: float | None = None
+    noise_relative: float = 0.0
+    start_curve: FiniteStrainCurve | None = field(default=None, repr=False)
+
+    def linear_model_error(self) -> dict[str, float | None]:
+        """Relative difference ``(linear − finite strain) / finite strain`` of ``U`` and
+        ``F`` at the finite-strain σ* (the same grasp and squeeze), and of the optima
+        ``quality`` and ``sigma_star`` (SPEC §8); ``None`` where undefined."""
+        lin = self.linear
+
+        def rel(a, b):
+            if a is None or b is None or not (math.isfinite(a) and math.isfinite(b)) or b == 0:
+                return None
+            return float((a - b) / abs(b))
+
+        s = self.sigma_star
+        if s is None:
+            U_err = F_err = None
+        else:
+            U_err = rel(float(lin.start_curve.energy_at(s)), float(self.start_curve.energy_at(s)))
+            F_err = rel(lin.start_curve.axial_force(s), self.force)
+        return {"U": U_err, "F": F_err, "quality": rel(lin.quality, self.quality),
+                "sigma_star": rel(lin.sigma_star, self.sigma_star)}
+
+    @property
+    def verdict(self) -> str:
+        """``"held"`` iff the finite-strain quality is positive on a mesh that resolves the
+        pads (the refinement's verdict rules apply on top, :mod:`.refine`)."""
+        if self.quality <= 0:
+            return "not held"
+        return "undecided" if self.linear.blind else "held"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The finite-strain values of the report (SPEC §8), SI."""
+        inf = math.isinf(self.U_A)
+        return {
+            "elasticity": self.elasticity,
+            "sigma0": self.sigma0,
+            "sigma_L": self.sigma_L,
+            "sigma_L_reached": self.sigma_L_reached,
+            "sigma_star": self.sigma_star,
+            "quality": self.quality,
+            "U_A": None if inf else self.U_A,
+            "U_A_infinite": inf,
+            "U_A_is_upper_bound": True,
+            "U_L": self.U_L,
+            "force": self.force,
+            "stiffness": self.stiffness,
+            "strain_at_sigma_star": self.strain_at_sigma_star,
+            "escape_path": [ax.to_dict() for ax in self.escape_path],
+            "n_axes_solved": self.n_axes,
+            "delta_unreachable": self.delta_unreachable,
+            "linear_model_error": self.linear_model_error(),
+            "curve": self.curve,
+        }
+
+
+def _allowed(grid, start: int, path: list[int]) -> set[int]:
+    """The start, the path's vertices and every grid neighbour of them."""
+    out = {start, *path}
+    for v in [start, *path]:
+        out.update(grid.neighbours(v))
+        out.update(grid.start_neighbours(v))
+    return out
+
+
+def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
+                           rtol: float = 0.05, n_samples: int = N_SAMPLES,
+                           solver: FiniteStrainPads | None = None) -> FiniteStrainResult:
+    """The finite-strain σ*, Q* of the grasp that ``linear`` solved on ``mesh``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The mesh ``linear`` was solved on (nodes in m, with a material).
+    linear : PadGraspResult
+        The linear result (its grid, start vertex and escape path are re-used).
+    elasticity : {"neo-hookean", "linear"}
+    rtol : float
+        Relative accuracy to which σ* and Q* are located on the sampled curve.
+    n_samples : int
+        σ samples of the first pass (≥ 3).
+    solver : FiniteStrainPads, optional
+        Reuse the finite-strain solver of this mesh.
+
+    Returns
+    -------
+    FiniteStrainResult
+    """
+    if linear.start_curve.expanding:
+        raise GraspError("--elasticity neo-hookean: expanding grasps (pads opening in a hole) "
+                         "are not supported yet; use --elasticity linear")
+    fs = FiniteStrainPads(mesh, elasticity) if solver is None else solver
+    pad: Pad = linear.pad
+    grid = linear.grid
+    s = grid.vertex(0, 0)
+    start_axis = grid.axis(s)
+    start = fs.curve(start_axis, pad)
+    e_L = mesh.material.elastic_limit_strain
+    ell = linear.limit.critical_distance
+    lim = fs.elastic_limit(start, e_L, ell, rtol=1e-4)
+    sigma_L, sigma0 = lim.sigma_L, start.sigma0
+    U_sL = start.energy_at(sigma_L)
+    allowed = _allowed(grid, s, list(linear.escape_vertices))
+    land = Landscape(fs, pad, RestrictedGrid(grid, allowed), sigma_L)     # type: ignore[arg-type]
+    land.seed(s, start)
+    tau = float(linear.noise_relative)
+    evals: dict[float, tuple] = {}
+
+    def evaluate(sig: float) -> float:
+        r = evals.get(sig)
+        if r is None:
+            rel = land.release(s, sig, tau)
+            UL = U_sL - start.energy_at(sig)
+            r = evals[sig] = (rel, UL, min(rel.U_A, UL))
+        return r[2]
+
+    # the search stays where the start axis can be squeezed (σ ≥ σ_L)
+    best = maximise_sampled(evaluate, sigma_L, sigma0, n_samples, rtol, 1e-4 * sigma0)
+    sigma_star = None if best is None else best[1]
+    sig_e = sigma0 if sigma_star is None else sigma_star
+    rel, UL, Q = evals[sig_e] if sig_e in evals else (land.release(s, sig_e, tau), 0.0, 0.0)
+    barrier = rel.strict and math.isfinite(rel.U_A) and sigma_star is not None
+    path = [grid.axis(v) for v in rel.path] if barrier else []
+    force = stiffness = strain = None
+    if sigma_star is not None:
+        force = start.axial_force(sigma_star)
+        h = 1e-3 * sigma0
+        f_lo, f_hi = start.axial_force(sigma_star + h), start.axial_force(sigma_star - h)
+        stiffness = (f_hi - f_lo) / (2 * h) if math.isfinite(f_lo + f_hi) else None
+        strain = start.strain(sigma_star, ell)
+    curve = _curve(evals, start)
+    return FiniteStrainResult(
+        elasticity=elasticity, linear=linear, sigma0=sigma0, sigma_L=sigma_L,
+        sigma_L_reached=lim.reached, sigma_star=sigma_star,
+        quality=0.0 if sigma_star is None else Q,
+        U_A=rel.U_A if sigma_star is not None else 0.0,
+        U_L=UL if sigma_star is not None else 0.0, force=force, stiffness=stiffness,
+        strain_at_sigma_star=strain, escape_path=path, n_axes=land.n_evaluated, curve=curve,
+        delta_unreachable=start.delta_failed, noise_relative=tau, start_curve=start)
+
+
+def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
+    """The evaluated separations, in order: ``sigma`` (m), ``U``, ``U_A``, ``U_L``, ``Q``
+    (J), ``F`` (N); ``None`` for ∞."""
+    sig = sorted(evals)
+
+    def num(v: float):
+        return float(v) if math.isfinite(v) else None
+
+    return {"sigma": sig, "U": [num(start.energy_at(x)) for x in sig],
+            "U_A": [num(evals[x][0].U_A) for x in sig], "U_L": [num(evals[x][1]) for x in sig],
+            "Q": [num(evals[x][2]) for x in sig], "F": [num(start.axial_force(x)) for x in sig]}
