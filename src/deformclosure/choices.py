@@ -11,7 +11,7 @@ from typing import Sequence
 
 from .errors import DeformClosureError
 
-__all__ = ["MODELS", "METHODS", "MODES", "PLANES", "choose"]
+__all__ = ["MODELS", "METHODS", "MODES", "PLANES", "MATERIAL_MODELS", "choose"]
 
 #: Two-jaw models: ``pads`` (physical pads on a grasp axis, SPEC §6) and ``paper`` (point
 #: jaws at mesh nodes, SPEC §4).
@@ -22,6 +22,8 @@ METHODS = ("exact", "approx", "paper")
 MODES = ("contracting", "expanding")
 #: Plane elasticity assumptions.
 PLANES = ("stress", "strain")
+#: Material laws (SPEC §8): small-strain linear elasticity (§1) or compressible neo-Hookean.
+MATERIAL_MODELS = ("linear", "neo-hookean")
 
 
 def choose(value: object, choices: Sequence[str], field: str,

@@ -6,13 +6,14 @@ A part file is JSON::
      "outer": [[0, 0], [12, 0], [12, 20], [0, 20]],
      "holes": [],
      "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
-                  "elastic_limit_strain": 0.8, "plane": "stress"},
+                  "elastic_limit_strain": 0.8, "plane": "stress", "model": "linear"},
      "mesh": {"max_area": 0.5, "min_angle": 30, "points": [[6, 0], [6, 20]]}}
 
 ``youngs_modulus`` is in Pa; every length (coordinates, thickness, points) is in
 ``units`` and ``max_area`` in ``units``². On reading, everything is converted to SI
 and the rings are normalised: outer ring counter-clockwise, holes clockwise, closing
-duplicate point and repeated consecutive points removed.
+duplicate point and repeated consecutive points removed. ``material.model`` (optional)
+names the material law: ``"linear"`` (default, SPEC §1) or ``"neo-hookean"`` (SPEC §8).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import shapely
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 from shapely.geometry import LinearRing, Polygon
 
-from .choices import PLANES, choose
+from .choices import MATERIAL_MODELS, PLANES, choose
 from .drawing import (drawing_source, is_drawing_file, material_file_beside,
                       material_path_beside, read_drawing)
 from .errors import DeformClosureError, PartError
@@ -62,6 +63,7 @@ class _MaterialModel(BaseModel):
     elastic_limit_strain: float
     plane: Literal["stress", "strain"] = "stress"
     critical_distance: float | None = None
+    model: Any = "linear"           # checked by choices.choose, whose message lists the laws
 
     @field_validator("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain",
                      "critical_distance", mode="before")
@@ -184,13 +186,17 @@ class Material:
         Radius ``ℓ`` (m) of the disc over which strains are averaged before they are
         compared with ``e_L`` by the pad model (SPEC §6, theory of critical distances);
         ``None``: 2 % of the part's diameter.
+    model : {"linear", "neo-hookean"}
+        Material law: small-strain linear elasticity (SPEC §1, default) or the
+        compressible neo-Hookean law with the same ``E``, ``nu`` (SPEC §8,
+        :class:`deformclosure.elasticity.neohookean.NeoHookean`).
 
     Examples
     --------
     Soft rubber, 1 mm thick (every value in SI):
 
     >>> Material(2e6, 0.1, 1e-3, 0.8)
-    Material(youngs_modulus=2000000.0, poisson_ratio=0.1, thickness=0.001, elastic_limit_strain=0.8, plane='stress', critical_distance=None)
+    Material(youngs_modulus=2000000.0, poisson_ratio=0.1, thickness=0.001, elastic_limit_strain=0.8, plane='stress', critical_distance=None, model='linear')
     >>> Material(2e6, 0.5, 1e-3, 0.8)
     Traceback (most recent call last):
     ...
@@ -203,11 +209,12 @@ class Material:
     elastic_limit_strain: float
     plane: str = "stress"
     critical_distance: float | None = None
+    model: str = "linear"
 
     def __post_init__(self) -> None:
         _check_material(self.youngs_modulus, self.poisson_ratio, self.thickness,
                         self.elastic_limit_strain, self.plane, self.critical_distance,
-                        prefix="material")
+                        prefix="material", model=self.model)
 
     @classmethod
     def from_dict(cls, data: Any, scale: float = 1.0, where: str = "material") -> "Material":
@@ -217,7 +224,8 @@ class Material:
         ----------
         data : dict
             ``youngs_modulus`` (Pa), ``poisson_ratio``, ``thickness`` (default 1),
-            ``elastic_limit_strain``, optional ``plane`` and ``critical_distance``.
+            ``elastic_limit_strain``, optional ``plane``, ``critical_distance`` and
+            ``model`` (``"linear"`` or ``"neo-hookean"``).
         scale : float
             Metres per unit of ``thickness`` and ``critical_distance``.
         where : str
@@ -242,14 +250,19 @@ class Material:
             raise PartError(_pydantic_message(err, ("material",), where)) from None
         cd = mat.critical_distance
         _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
-                        mat.elastic_limit_strain, mat.plane, cd, prefix=where)
+                        mat.elastic_limit_strain, mat.plane, cd, prefix=where, model=mat.model)
         if not math.isfinite(mat.thickness * scale) or mat.thickness * scale <= 0:
             raise PartError(f"{where}.thickness = {mat.thickness!r}: out of range in these units")
         return cls(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
-                   mat.elastic_limit_strain, mat.plane, None if cd is None else cd * scale)
+                   mat.elastic_limit_strain, mat.plane, None if cd is None else cd * scale,
+                   mat.model)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict in SI units (thickness and critical distance in m)."""
+        """JSON-ready dict in SI units (thickness and critical distance in m).
+
+        ``model`` is written only when it is not ``"linear"`` (the default), so files and
+        reports of linear parts are unchanged.
+        """
         d = {
             "youngs_modulus": self.youngs_modulus,
             "poisson_ratio": self.poisson_ratio,
@@ -259,6 +272,8 @@ class Material:
         }
         if self.critical_distance is not None:
             d["critical_distance"] = self.critical_distance
+        if self.model != "linear":
+            d["model"] = self.model
         return d
 
 
@@ -306,7 +321,7 @@ def read_material(source: str | InputFile, units: str = "m", where: str = "--mat
 
 
 def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
-                    critical_distance: float | None, prefix: str) -> None:
+                    critical_distance: float | None, prefix: str, model: str = "linear") -> None:
     """Refuse material values outside their physical ranges, naming ``prefix.field``."""
     cd = critical_distance
     checks = [
@@ -325,6 +340,7 @@ def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
         if not ok:
             raise PartError(f"{prefix}.{name} = {value!r}: {fix}")
     choose(plane, PLANES, f"{prefix}.plane", PartError)
+    choose(model, MATERIAL_MODELS, f"{prefix}.model", PartError)
 
 
 @dataclass(frozen=True)

@@ -197,6 +197,23 @@ class _Pattern:
         K.has_sorted_indices = True
         return K
 
+    def element_blocks(self, Kb: np.ndarray, symmetric: bool = False) -> sp.csr_matrix:
+        """CSR matrix from element 2×2 node blocks ``Kb[e, p, q]`` of shape ``(m, 3, 3, 2, 2)``.
+
+        ``Kb[e, p, q, i, k]`` couples DOF ``i`` of local node ``p`` with DOF ``k`` of local
+        node ``q`` (element matrix ``(m, 6, 6)`` reshaped and transposed). ``symmetric``:
+        the element matrices are symmetric, so the lower blocks are the upper ones'
+        transposes (exactly symmetric result, less work). The sparsity pattern is the
+        same for any ``Kb`` (explicit zeros are kept).
+        """
+        Kb = np.asarray(Kb, float)
+        f = self.flip[..., None, None]
+        pq, qp = Kb[:, _P, _Q], Kb[:, _Q, _P]
+        upper = np.ascontiguousarray(np.where(f, qp, pq).reshape(-1, 4).T)
+        lower = None if symmetric else np.ascontiguousarray(np.where(f, pq, qp).reshape(-1, 4).T)
+        diag = np.ascontiguousarray(Kb[:, _P, _P].reshape(-1, 4).T)
+        return self.blocks(diag, upper, lower)
+
     @classmethod
     def of_mesh(cls, mesh) -> "_Pattern":
         """The pattern of ``mesh``, computed once and kept in the mesh's cache."""
@@ -212,16 +229,8 @@ def assemble(triangles: np.ndarray, Ke: np.ndarray, n_nodes: int) -> sp.csr_matr
     ``Ke`` need not be symmetric. Triangles must have three distinct nodes.
     """
     t = np.asarray(triangles, dtype=np.int64)
-    m = len(t)
-    pat = _Pattern(t, n_nodes)
-    B = np.asarray(Ke, float).reshape(m, 3, 2, 3, 2).transpose(0, 1, 3, 2, 4)  # (m,3,3,2,2)
-    f = pat.flip[..., None, None]
-    pq, qp = B[:, _P, _Q], B[:, _Q, _P]
-    upper = np.where(f, qp, pq).reshape(-1, 4).T
-    lower = np.where(f, pq, qp).reshape(-1, 4).T
-    diag = B[:, _P, _P].reshape(-1, 4).T
-    return pat.blocks(np.ascontiguousarray(diag), np.ascontiguousarray(upper),
-                      np.ascontiguousarray(lower))
+    Kb = np.asarray(Ke, float).reshape(len(t), 3, 2, 3, 2).transpose(0, 1, 3, 2, 4)
+    return _Pattern(t, n_nodes).element_blocks(Kb)
 
 
 def stiffness_matrix(mesh, material: Material | None = None) -> sp.csr_matrix:

@@ -58,9 +58,10 @@ def _same_loop(a: np.ndarray, b: np.ndarray) -> bool:
 #: Keys of a mesh JSON file (``provenance`` is written by the CLI, not read).
 _MESH_KEYS = {"format", "name", "units", "nodes", "triangles", "boundary", "material",
               "provenance"}
-#: Keys of its ``material`` block; all but ``plane`` and ``critical_distance`` required.
+#: Keys of its ``material`` block; all but ``plane``, ``critical_distance`` and ``model``
+#: required.
 _MATERIAL_KEYS = ("youngs_modulus", "poisson_ratio", "thickness", "elastic_limit_strain", "plane",
-                  "critical_distance")
+                  "critical_distance", "model")
 
 
 def _check_mesh_keys(data: Any) -> None:
@@ -121,7 +122,8 @@ def _material_block(m: Any, scale: float) -> Material:
         raise MeshError("material.critical_distance: must be a number (m)")
     try:
         return Material(float(vals[0]), float(vals[1]), float(vals[2]) * scale, float(vals[3]),
-                        m.get("plane", "stress"), None if cd is None else float(cd) * scale)
+                        m.get("plane", "stress"), None if cd is None else float(cd) * scale,
+                        m.get("model", "linear"))
     except PartError as err:
         raise MeshError(str(err)) from None
 
