@@ -1,5 +1,5 @@
 """Release work with dissipation (SPEC §9): the label-setting search
-``landscape.search.dissipative_escape``.
+``landscape.search.dissipative_escape`` and the pads' moves ``pads.release_work``.
 
 The references are written here and share nothing with the search:
 
@@ -22,10 +22,19 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
+from deformclosure import Part, mesh_part
+from deformclosure.errors import GraspError
 from deformclosure.landscape.search import dissipative_escape, minimax_escape
+from deformclosure.pads.contact import PadContact
+from deformclosure.pads.geometry import GraspAxis, Pad
+from deformclosure.pads.landscape import AxisGrid, Landscape
+from deformclosure.pads.release_work import (contact_normal_forces, gripper_centre,
+                                             is_released, move_dissipation, move_slip,
+                                             release_work, row_tangents)
 from shared_helpers import adjacency_sets
 
 SETTINGS = settings(max_examples=200, deadline=None,
@@ -354,3 +363,207 @@ def test_a_start_without_a_finite_energy_is_refused():
     with pytest.raises(ValueError, match="energy"):
         dissipative_escape(0, lambda v: [1 - v], lambda v, near: math.inf, lambda v, w: 0.0,
                            lambda v, e: v == 1)
+
+
+# =========================================================================== the pads' moves
+# ``pads.release_work``: the slip of a move between neighbouring grasp axes from the rigid
+# relative motion of part and gripper, its dissipation, and the release work on the axis
+# landscape. References: the kinematics of a rigid turn and shift written here (a point at
+# radius r turned by Δθ; the chord of a material point), and the uniaxial block between
+# flat pads wider than it, F = E t h δ / L (exact on CST: a uniform strain).
+MM = 1e-3
+E_BLOCK, T_BLOCK, L_BLOCK, H_BLOCK = 2e6, 1 * MM, 12 * MM, 20 * MM
+SQUEEZE = 0.2 * MM
+angles = st.floats(-math.pi, math.pi)
+lengths = st.floats(-0.02, 0.02)
+
+
+@st.composite
+def disc_move(draw):
+    """Contacts on a circle of radius r about a centre C, radial normals, and a grasp axis
+    through C turned by Δθ (|Δθ| < π/2) about C, any origin."""
+    r = draw(st.floats(1e-3, 0.02))
+    C = np.array([draw(lengths), draw(lengths)])
+    o = (draw(lengths), draw(lengths))
+    th, dth = draw(angles), draw(st.floats(-1.5, 1.5))
+    alpha = np.array(draw(st.lists(angles, min_size=1, max_size=5)))
+    nrm = np.column_stack([np.cos(alpha), np.sin(alpha)])
+    av, aw = GraspAxis.at(C, th, o), GraspAxis.at(C, th + dth, o)
+    return C + r * nrm, nrm, av, aw, C, r, dth
+
+
+@SETTINGS
+@given(disc_move())
+def test_a_turn_of_a_round_part_about_its_centre_slips_r_dtheta(case):
+    """A round part turned by Δθ about its centre between the pads: every contact (radial
+    normal, tangent along the pad) slips ``r Δθ``; the displacement of the material point
+    that was in contact, projected on the tangent, is ``r sin Δθ`` (the chord), the same
+    to first order."""
+    P, nrm, av, aw, C, r, dth = case
+    T = row_tangents(nrm)
+    slip = move_slip(P, T, av, C, aw, C)
+    assert np.allclose(np.abs(slip), r * abs(dth), rtol=1e-12, atol=1e-15 * r)
+    # the chord: gripper coordinates R_w^T (p − C) − R_v^T (p − C), on the tangent
+    Rv = np.column_stack([av.direction, av.normal])
+    Rw = np.column_stack([aw.direction, aw.normal])
+    chord = np.einsum("ij,ij->i", T @ Rv, (P - C) @ Rw - (P - C) @ Rv)
+    assert np.allclose(np.abs(chord), r * abs(math.sin(dth)), rtol=1e-9, atol=1e-15 * r)
+
+
+@SETTINGS
+@given(st.floats(-math.pi, math.pi), lengths, lengths, st.floats(-0.3, 0.3),
+       st.lists(st.tuples(lengths, lengths, angles), min_size=1, max_size=4),
+       st.tuples(lengths, lengths), angles, st.tuples(lengths, lengths))
+def test_move_slip_is_frame_invariant_and_blind_to_the_pad_labels(th, c, dc, dth, pts, o, rot,
+                                                                  shift):
+    """The slip of a move does not depend on the part frame (turn and shift everything) nor
+    on which of the two descriptions ``(θ, c)``, ``(θ + π, −c)`` of the end axis is
+    given; for a move without a turn it is the shift ``R_vᵀ (C_v − C_w)`` on each tangent."""
+    P = np.array([p[:2] for p in pts])
+    T = np.column_stack([np.cos([p[2] for p in pts]), np.sin([p[2] for p in pts])])
+    av, aw = GraspAxis(th, c, o), GraspAxis(th + dth, c + dc, o)
+    Cv = av.point + 0.003 * av.direction
+    Cw = aw.point - 0.002 * aw.direction
+    ref = move_slip(P, T, av, Cv, aw, Cw)
+    flipped = GraspAxis(aw.angle + math.pi, -aw.offset, o)
+    assert np.allclose(move_slip(P, T, av, Cv, flipped, Cw), ref, rtol=1e-9, atol=1e-14)
+    # the same move seen in a part frame turned by `rot` and shifted by `shift`
+    Q = np.array([[math.cos(rot), -math.sin(rot)], [math.sin(rot), math.cos(rot)]])
+    sh = np.array(shift)
+    def moved(ax):  # noqa: E306
+        o2 = Q @ np.asarray(o) + sh
+        return GraspAxis(ax.angle + rot, ax.offset, (float(o2[0]), float(o2[1])))
+    got = move_slip(P @ Q.T + sh, T @ Q.T, moved(av), Q @ Cv + sh, moved(aw), Q @ Cw + sh)
+    assert np.allclose(got, ref, rtol=1e-9, atol=1e-14)
+    shifted = move_slip(P, T, av, Cv, GraspAxis(th, c + dc, o), Cw)
+    Rv = np.column_stack([av.direction, av.normal])
+    assert np.allclose(shifted, T @ Rv @ (Rv.T @ (Cv - Cw)), rtol=1e-12, atol=1e-15)
+
+
+def test_move_slip_tends_to_the_chord_for_small_moves():
+    """For a general small move (turn and shift, off-centre contacts) the slip and the
+    chord projection differ by O(step²): halving the step quarters the difference."""
+    P = np.array([[0.004, 0.001], [-0.006, 0.002], [0.001, -0.003]])
+    T = row_tangents(np.array([[1.0, 0.2], [-1.0, 0.1], [0.3, 1.0]])
+                     / np.linalg.norm([[1.0, 0.2], [-1.0, 0.1], [0.3, 1.0]], axis=1)[:, None])
+    av = GraspAxis(0.2, 0.001)
+    Cv = av.point
+    diffs = []
+    for h in (0.02, 0.01, 0.005):
+        aw = GraspAxis(0.2 + h, 0.001 + 0.05 * h)
+        Cw = aw.point + 0.03 * h * aw.direction
+        Rv = np.column_stack([av.direction, av.normal])
+        Rw = np.column_stack([aw.direction, aw.normal])
+        chord = np.einsum("ij,ij->i", T @ Rv, (P - Cw) @ Rw - (P - Cv) @ Rv)
+        diffs.append(np.abs(move_slip(P, T, av, Cv, aw, Cw) - chord).max())
+    assert diffs[0] / diffs[1] == pytest.approx(4, rel=0.05)
+    assert diffs[1] / diffs[2] == pytest.approx(4, rel=0.05)
+
+
+def test_move_dissipation_is_mu_f_slip():
+    assert move_dissipation(0.5, np.array([1.0, -2.0, 0.0]), np.array([-0.1, 0.2, 5.0])) \
+        == pytest.approx(0.5 * (0.1 + 0.4))
+
+
+# --------------------------------------------------------------------------- the block
+@pytest.fixture(scope="module")
+def block():
+    """A 12 × 20 mm block (CST, plane stress) between flat pads 30 mm wide (wider than its
+    20 mm side), squeezed 0.2 mm along x through its centre; a 24 × 25 axis grid."""
+    mesh = mesh_part(Part.from_dict({
+        "name": "release-work-block", "units": "mm",
+        "outer": [[0, 0], [12, 0], [12, 20], [0, 20]], "holes": [],
+        "material": {"youngs_modulus": E_BLOCK, "poisson_ratio": 0.3, "thickness": 1.0,
+                     "elastic_limit_strain": 0.8, "plane": "stress"},
+        "mesh": {"max_area": 2.0, "min_angle": 30, "points": [[0, 10], [12, 10]]}}))
+    pc = PadContact(mesh)
+    pad = Pad(30 * MM, 1 * MM)
+    start = GraspAxis.at(np.array([0.0, 10 * MM]), 0.0, tuple(pc.centroid))
+    grid = AxisGrid.over_part(pc, start, pad, 24, 25)
+    sigma = L_BLOCK - SQUEEZE
+    return Landscape(pc, pad, grid, sigma), grid.vertex(0, 0), sigma
+
+
+def uniaxial_force() -> float:
+    """Pad force (N) on the block: ``E t h δ / L`` (uniform uniaxial stress, plane stress,
+    frictionless pads wider than the block)."""
+    return E_BLOCK * T_BLOCK * H_BLOCK * SQUEEZE / L_BLOCK
+
+
+def test_a_sideways_shift_between_flat_pads_dissipates_mu_f_a_plus_f_b_dc(block):
+    """A move by Δc across the axis slips every pressed contact by ``Δc`` and dissipates
+    ``μ (F_A + F_B) |Δc|`` (hand calculation, with ``F_A = F_B = E t h δ / L``)."""
+    land, s, sigma = block
+    grid = land.grid
+    c = land.curve(s)
+    f = contact_normal_forces(c, sigma)
+    on = f > 0
+    F_A, F_B = f[on & (c.pad_of == 0)].sum(), f[on & (c.pad_of == 1)].sum()
+    assert F_A == pytest.approx(uniaxial_force(), rel=1e-9)
+    assert F_B == pytest.approx(uniaxial_force(), rel=1e-9)
+    P = land.solver.mesh.nodes[c.nodes[on]]
+    T = row_tangents(c.normals[on])
+    for w in (grid.vertex(0, 1), grid.vertex(0, -1)):
+        slip = move_slip(P, T, grid.axis(s), gripper_centre(c), grid.axis(w),
+                         gripper_centre(land.curve(w)))
+        assert np.allclose(np.abs(slip), grid.d_offset, rtol=1e-12)
+        mu = 0.5
+        assert move_dissipation(mu, f[on], slip) == pytest.approx(
+            mu * 2 * uniaxial_force() * grid.d_offset, rel=1e-9)
+
+
+def test_a_turn_of_the_block_about_its_centre_slips_its_lever_arm_times_dtheta(block):
+    """The block is symmetric about its centre: turning the axis by Δθ about it keeps the
+    pads' centre there, and each contact on the flat faces slips ``r Δθ`` with ``r`` its
+    lever arm, the half-width 6 mm (the contact's distance along the normal)."""
+    land, s, sigma = block
+    grid = land.grid
+    c = land.curve(s)
+    f = contact_normal_forces(c, sigma)
+    on = f > 0
+    P = land.solver.mesh.nodes[c.nodes[on]]
+    for w in grid.neighbours(s)[-2:]:              # ±Δθ, one across the periodic wrap
+        Cw = gripper_centre(land.curve(w))
+        assert np.allclose(Cw, land.solver.centroid, atol=1e-12)
+        slip = move_slip(P, row_tangents(c.normals[on]), grid.axis(s), gripper_centre(c),
+                         grid.axis(w), Cw)
+        assert np.allclose(np.abs(slip), 0.5 * L_BLOCK * grid.d_angle, rtol=1e-9)
+
+
+def test_release_work_of_the_block_pulled_out_sideways(block):
+    """Frictionless, the block slides out with no work (SPEC §6: not held). With μ = 0.5
+    the escape starts by sliding across the pads, and while the flat faces cover the
+    block's side (a shift up to 5 mm) the work is the hand value ``μ (F_A + F_B) Δc`` per
+    move, the elastic energy unchanged; the release work grows with μ, and a doubled
+    normal force counts as a doubled μ."""
+    land, s, sigma = block
+    grid = land.grid
+    free = release_work(land, s, sigma, 0.0)
+    assert free.work == 0.0 and free.dissipation == 0.0
+    assert is_released(land.curve(free.path[-1]), sigma)
+    esc = release_work(land, s, sigma, 0.5)
+    assert is_released(land.curve(esc.path[-1]), sigma) and esc.complete
+    full = int(5 * MM // grid.d_offset)             # moves with the side fully covered
+    cells = [grid.cell(v) for v in esc.path[:full + 1]]
+    sign = cells[1][1]
+    assert cells == [(0, sign * k) for k in range(full + 1)]
+    per_move = 0.5 * 2 * uniaxial_force() * grid.d_offset
+    assert np.allclose(esc.works[:full + 1], per_move * np.arange(full + 1), rtol=1e-9)
+    assert esc.work >= esc.works[full]
+    quarter = release_work(land, s, sigma, 0.25)
+    assert free.work <= quarter.work <= esc.work
+    doubled = release_work(land, s, sigma, 0.25,
+                           normal_forces=lambda cv, sg: 2 * contact_normal_forces(cv, sg))
+    assert doubled.work == pytest.approx(esc.work, rel=1e-12)
+
+
+def test_released_axes_and_bad_friction(block):
+    land, s, sigma = block
+    c = land.curve(s)
+    assert not is_released(c, sigma)
+    assert is_released(c, c.sigma0) and is_released(c, c.sigma0 + 1e-4)
+    far = land.grid.vertex(0, land.grid.j_max)
+    assert land.curve(far).touch is None and is_released(land.curve(far), sigma)
+    for bad in (-0.1, math.nan, math.inf):
+        with pytest.raises(GraspError, match="friction"):
+            release_work(land, s, sigma, bad)
