@@ -12,7 +12,9 @@ share what is the same on every landscape:
   over a compiled vertex oracle (:func:`.kernels.vertex_oracle`) that may bound each
   energy over a cell of the landscape instead of knowing it — the paper planner's cells
   of separations; an energy vector is its point cell, :func:`.kernels.bottleneck_escape`
-  (import :mod:`.kernels` where used: it needs numba);
+  (import :mod:`.kernels` where used: it needs numba); with friction (SPEC §9),
+  :func:`~.search.dissipative_escape`, the same search on the work of each path (energy
+  change plus each move's dissipation), label-setting on (peak work, dissipation);
 * :mod:`.noise` — the noise-floor rule: from measured discretisation noise to the floor
   ``τ``, and the "beyond the floor" decisions;
 * :mod:`.limit` — the elastic-limit rule;
@@ -22,7 +24,7 @@ It imports nothing of the models or above.
 """
 
 from .noise import combined_floor, higher, jitter_floor, resolved, twin_floor
-from .search import Escape, minimax_escape
+from .search import DissipativeEscape, Escape, dissipative_escape, minimax_escape
 
-__all__ = ["Escape", "minimax_escape", "twin_floor", "jitter_floor", "combined_floor", "higher",
+__all__ = ["Escape", "minimax_escape", "DissipativeEscape", "dissipative_escape", "twin_floor", "jitter_floor", "combined_floor", "higher",
            "resolved"]

@@ -4,7 +4,8 @@ Pipeline: :mod:`.geometry` (pads, axes, first touch) → :mod:`.contact` (the co
 problem of one axis on the gauged boundary compliance of :mod:`deformclosure.contact`,
 traced exactly in σ by :func:`deformclosure.contact.solve.trace_contact`) → :mod:`.limit`
 (elastic limit over the critical distance) →
-:mod:`.landscape` (release over axes) and :mod:`.noise` (what the mesh resolves) →
+:mod:`.landscape` (release over axes; with friction, the moves' dissipation and the
+release work of :mod:`.release_work`, SPEC §9) and :mod:`.noise` (what the mesh resolves) →
 :mod:`.optimize` (σ*) → :mod:`.refine` (convergence, error, verdict); the planner over
 grasp axes is :mod:`deformclosure.planning.pads`.
 """
