@@ -25,11 +25,11 @@ from .geometry import GraspAxis, Pad
 from .landscape import Landscape
 from .large_deformation import FiniteStrainCurve, FiniteStrainPads
 
-__all__ = ["FiniteStrainResult", "RestrictedGrid", "optimize_finite_strain",
+__all__ = ["FiniteStrainResult", "RestrictedGrid", "optimize_finite_strain", "finite_strain_levels",
            "UPPER_BOUND_NOTE"]
 
 #: σ samples of the first pass of the σ*-search.
-N_SAMPLES = 12
+N_SAMPLES = 8
 
 UPPER_BOUND_NOTE = ("U_A at finite strain is the barrier on the linear model's escape path "
                     "and its grid neighbours re-solved: an upper bound on the finite-strain "
@@ -102,6 +102,71 @@ class FiniteStrainResult:
     noise_relative: float = 0.0
     start_curve: FiniteStrainCurve | None = field(default=None, repr=False)
 
+    # ----------------------------------------------------------- a level of a refinement
+    # The attributes :class:`.refine.RefinedPadGrasp` reads of a level, so that the one
+    # error estimate, stopping rule and verdict serve the finite-strain levels too.
+    @property
+    def axis(self) -> GraspAxis:
+        return self.linear.axis
+
+    @property
+    def pad(self) -> Pad:
+        return self.linear.pad
+
+    @property
+    def limit(self):
+        return self.linear.limit
+
+    @property
+    def n_nodes(self) -> int:
+        return self.linear.n_nodes
+
+    @property
+    def blind(self) -> bool:
+        return self.linear.blind
+
+    @property
+    def grid(self):
+        return self.linear.grid
+
+    @property
+    def saddle(self):
+        return self.linear.saddle
+
+    @property
+    def solver(self):
+        return self.linear.solver
+
+    @property
+    def noise(self) -> float:
+        """Noise floor (J) at σ*: the linear landscape's relative floor times U(σ*)."""
+        s = self.sigma_star if self.sigma_star is not None else 0.5 * (self.sigma_L + self.sigma0)
+        U = self.start_curve.energy_at(s)
+        return self.noise_relative * U if math.isfinite(U) else 0.0
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        out = tuple(w for w in self.linear.warnings if "linear elasticity is outside" not in w)
+        if self.delta_unreachable is not None:
+            out += (f"the finite-strain solver could not squeeze the start axis beyond "
+                    f"sigma = {self.sigma0 - self.delta_unreachable:.4g} m (Newton failed "
+                    "after every step halving); the curve stops there",)
+        return out + (UPPER_BOUND_NOTE,)
+
+    def state_at(self, sigma: float, label: str):
+        """Displacement (m) and nodal contact forces (N) of the start axis at ``sigma`` (m)
+        at finite strain, as a :class:`deformclosure.fields.FieldState`."""
+        from ..fields import FieldState
+
+        c = self.start_curve
+        n = self.linear.n_nodes
+        forces = np.zeros((n, 2))
+        st = c.state(c.delta(sigma)) if c.delta(sigma) > c.delta0 else None
+        if st is None:
+            return FieldState(label, np.zeros(2 * n), forces)
+        np.add.at(forces, c.problem.node, st.forces())
+        return FieldState(label, st.u, forces)
+
     def linear_model_error(self) -> dict[str, float | None]:
         """Relative difference ``(linear − finite strain) / finite strain`` of ``U`` and
         ``F`` at the finite-strain σ* (the same grasp and squeeze), and of the optima
@@ -131,10 +196,14 @@ class FiniteStrainResult:
         return "undecided" if self.linear.blind else "held"
 
     def to_dict(self) -> dict[str, Any]:
-        """The finite-strain values of the report (SPEC §8), SI."""
+        """The pads report (SPEC §6) with the finite-strain values in place of the linear
+        ones, ``linear_model_error`` and the linear values under ``linear`` (SPEC §8), SI."""
+        lin = self.linear.to_dict()
         inf = math.isinf(self.U_A)
-        return {
+        out = dict(lin)
+        out.update({
             "elasticity": self.elasticity,
+            "energy_model": self.elasticity,
             "sigma0": self.sigma0,
             "sigma_L": self.sigma_L,
             "sigma_L_reached": self.sigma_L_reached,
@@ -152,7 +221,15 @@ class FiniteStrainResult:
             "delta_unreachable": self.delta_unreachable,
             "linear_model_error": self.linear_model_error(),
             "curve": self.curve,
-        }
+            "verdict": self.verdict,
+            "noise_floor": self.noise,
+            "noise_floor_relative": self.noise_relative,
+            "warnings": list(self.warnings),
+            "linear": {k: lin[k] for k in ("sigma_L", "sigma_star", "quality", "U_A",
+                                           "U_A_infinite", "U_L", "force", "stiffness",
+                                           "strain_at_sigma_star", "verdict")},
+        })
+        return out
 
 
 def _allowed(grid, start: int, path: list[int]) -> set[int]:
@@ -251,3 +328,34 @@ def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
     return {"sigma": sig, "U": [num(start.energy_at(x)) for x in sig],
             "U_A": [num(evals[x][0].U_A) for x in sig], "U_L": [num(evals[x][1]) for x in sig],
             "Q": [num(evals[x][2]) for x in sig], "F": [num(start.axial_force(x)) for x in sig]}
+
+
+def finite_strain_levels(refined, elasticity: str = "neo-hookean", rtol: float | None = None,
+                         last: int = 2):
+    """The finite-strain twin of a refined linear pad grasp (SPEC §8).
+
+    Each of the ``last`` finest levels of ``refined`` (every level when it is a fixed
+    ``--refine N`` sequence) is re-solved at finite strain on its own mesh, grid and escape
+    path (:func:`optimize_finite_strain`); the levels form a
+    :class:`~deformclosure.pads.refine.RefinedPadGrasp`, so the error estimate (level
+    differences, SPEC §6), the convergence flag and the verdict are the same rules as the
+    linear model's, applied to the finite-strain values.
+
+    Parameters
+    ----------
+    refined : RefinedPadGrasp
+        The linear refinement (its levels keep their solvers, hence their meshes).
+    elasticity : {"neo-hookean", "linear"}
+    rtol : float, optional
+        Accuracy of the sampled σ*-search; default the refinement's (or 0.05).
+    last : int
+        Levels re-solved after an ``--rtol`` refinement.
+    """
+    from .refine import DEFAULT_RTOL, RefinedPadGrasp
+
+    rt = rtol if rtol is not None else (refined.rtol if refined.rtol is not None else DEFAULT_RTOL)
+    levels = refined.levels if refined.rtol is None else refined.levels[-last:]
+    nl = [optimize_finite_strain(r.solver.mesh, r, elasticity=elasticity, rtol=rt) for r in levels]
+    k = len(nl)
+    return RefinedPadGrasp(nl, refined.max_areas[-k:], refined.rtol, refined.adaptive,
+                           refined.stopped, refined.seconds[-k:], refined.saddles)

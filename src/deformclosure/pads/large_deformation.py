@@ -90,7 +90,8 @@ class FiniteStrainCurve:
         rows = [(loop, 0), (loop, 1)]
         G = gauge_functionals(mesh)
         gauge = np.vstack([n[0] * G[0] + n[1] * G[1], G[2]])
-        self.problem = FiniteStrainContact(owner.law, mesh.nodes, rows, gauge, mesh.diameter)
+        self.problem = FiniteStrainContact(owner.law, mesh.nodes, rows, gauge, mesh.diameter,
+                                           mesh.triangles)
         self._a, self._n = a, n
         self._on_a = self.problem.body == 0
 

@@ -387,7 +387,7 @@ def _range_warnings(strain: float | None) -> tuple[str, ...]:
     if strain is not None and strain > LINEAR_STRAIN_RANGE:
         return (f"the strain at sigma* is {strain:.3g} (> {LINEAR_STRAIN_RANGE}): linear "
                 "elasticity is outside its range there, so sigma* and Q* are first-order "
-                "estimates (SPEC §8; --elasticity neo-hookean is not available yet)",)
+                "estimates; rerun with --elasticity neo-hookean (SPEC §8)",)
     return ()
 
 

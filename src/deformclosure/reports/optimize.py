@@ -24,6 +24,9 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
     if model == "paper":
         return _paper(part, p)
+    if p.get("elasticity") == "neo-hookean" and model == "paper":
+        raise GraspError("--elasticity neo-hookean: only with the pads model (SPEC §8); drop "
+                         "--model paper / --jaws")
     only_for("paper", [("--jaws", p["jaws"] is not None), ("--jaw-width", p["jaw_width"] != 0.0),
                        ("--eps", p["eps"] is not None),
                        ("--export-graph", p["export_graph"] is not None),
@@ -78,6 +81,13 @@ def _pads(part, p: dict, notify) -> Report:
                     max_seconds=p["max_seconds"], adaptive=not p.get("uniform", False),
                     progress=progress, expanding_from=start, n_angles=p["grid_angles"],
                     n_offsets=p["grid_offsets"])
+    elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    if elasticity == "neo-hookean":
+        from ..pads.finite_strain_grasp import finite_strain_levels
+
+        if notify is not None:
+            notify("finite strain (neo-Hookean) ...")
+        res = finite_strain_levels(res, "neo-hookean", rtol)
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     lines = _pads_lines(res, data, pad, inp.unit, scale)
     rep = Report("optimize", data, lines,
@@ -141,8 +151,15 @@ def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
         ua = "infinite" if np.isinf(fine.U_A) else f"{fine.U_A:.6g} J"
         lines.append(f"sigma* = {fine.sigma_star * s:.6g} {unit}  Q* = {fine.quality:.6g} J  "
                      f"U_A = {ua}  U_L = {fine.U_L:.6g} J  (noise floor {fine.noise:.3g} J)")
-        lines.append(f"grip force at sigma* = {fine.force:.4g} N  "
-                     f"(stiffness {fine.stiffness:.4g} N/m)")
+        stiff = "-" if fine.stiffness is None else f"{fine.stiffness:.4g}"
+        lines.append(f"grip force at sigma* = {fine.force:.4g} N  (stiffness {stiff} N/m)")
+    if data.get("elasticity") == "neo-hookean":
+        lin, err = data["linear"], data["linear_model_error"]
+        ls = "-" if lin["sigma_star"] is None else f"{lin['sigma_star'] * s:.6g} {unit}"
+        lines.append(f"neo-Hookean (finite strain, exact pad contact); the linear model at the "
+                     f"same grasp: sigma* = {ls}, Q* = {lin['quality']:.6g} J; linear model "
+                     f"error: U {_pct(err['U'])}, F {_pct(err['F'])}, Q* {_pct(err['quality'])}, "
+                     f"sigma* {_pct(err['sigma_star'])}")
     if len(data["convergence"]) > 1:
         lines.append(f"{'level':>5} {'nodes':>7} {'grid x':>6} {'sigma* (' + unit + ')':>14} "
                      f"{'Q* (J)':>12} {'U_A (J)':>12}")
@@ -160,6 +177,10 @@ def _pads_lines(res, data: dict, pad, unit: str, scale: float) -> list[str]:
                      f"converged: {'yes' if data['converged'] else 'no'}")
     lines.append(f"verdict: {data['verdict'].upper()}")
     return lines
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{x:+.1%}"
 
 
 def _fmt(x) -> str:
@@ -189,7 +210,8 @@ def _pads_writer(inp):
         if p["plot"]:
             from ..plotting.pads import save_pad_plots
 
-            written += save_pad_plots(fine, inp.mesh, p["plot"],
+            # the pads' pictures draw the linear model's state (finite strain: its twin)
+            written += save_pad_plots(getattr(fine, "linear", fine), inp.mesh, p["plot"],
                                       units=inp.unit if inp.unit != "m" else "mm")
         return [str(w) for w in written]
 

@@ -26,7 +26,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-from ..choices import METHODS, MODELS
+from ..choices import MATERIAL_MODELS, METHODS, MODELS
 from ..errors import DeformClosureError
 from ..limits import MAX_SLICE_RESOLUTION
 
@@ -119,6 +119,10 @@ _ACCURACY = (
     Opt("uniform", ("--uniform",), "flag", False,
         help="pads: with --rtol, refine the mesh everywhere instead of adaptively."),
 )
+_ELASTICITY = Opt("elasticity", ("--elasticity",), "choice", choices=MATERIAL_MODELS,
+                  help="pads: material law — linear (small strain, SPEC §6) or neo-hookean "
+                       "(finite strain with the exact pad contact, SPEC §8); default the "
+                       "part's material.model (linear).")
 _UNITS = Opt("units", ("--units",), "str",
              help="Unit of the lengths given here and of a meshio file's coordinates (m, cm, "
                   "mm, in; default: the part file's units, m for mesh files).")
@@ -173,6 +177,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="pads: solve N uniform levels (h halving, the landscape refined at the "
                  "saddle) instead of refining to --rtol; 1 = one mesh, no error estimate."),
         *_ACCURACY,
+        _ELASTICITY,
         Opt("method", ("--method",), "choice", "exact", choices=METHODS, show_default=True,
             help="paper model: exact: ours; paper: every crossing; approx: ε-grid."),
         Opt("eps", ("--eps",), "float",
