@@ -435,7 +435,7 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
         h = p_end - st.p
         ev, kind = -1, ""
         contact = mode != OPEN
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             # rows on a boundary were decided by the pivoting: no event of theirs at h = 0
             ho = np.where(~contact & ~touching & (dg < 0), np.maximum(g, 0.0) / -dg, np.inf)
             hl = np.where(contact & ~releasing & (dlam < 0), st.lam / -dlam, np.inf)

@@ -163,6 +163,13 @@ class FrictionalCurve:
         ``STICK``, ``SLIP_POS``, ``SLIP_NEG``)."""
         return self.state(sigma).mode
 
+    def kinks(self) -> np.ndarray:
+        """Separations (m) of the breakpoints of the stick/slip path (contact, stick and
+        slip events), from first touch on; the frictionless curve's at ``μ = 0``."""
+        if self.problem is None or self._frictionless():
+            return self.curve.kinks()
+        return self.curve.sigma_at(self.path.p)
+
     def energy(self, sigma: float) -> float:
         """Elastic energy (J) at ``sigma`` (m); the frictionless curve's at ``μ = 0``."""
         if self.problem is None or self._frictionless():
@@ -197,9 +204,12 @@ class FrictionalCurve:
         return -float((f @ n).sum()), -moment
 
     # ------------------------------------------------------------------ loading
-    def _loading_problem(self, sigma: float, direction: np.ndarray) -> tuple[FrictionProblem, FrictionState]:
-        """The problem with the gauge released at ``sigma``: rigid motions ``[t, v, φ]``,
-        external load ``P0 + α direction`` (``[force (N), torque (N·m)]``)."""
+    def loading_problem(self, sigma: float, direction: np.ndarray) -> tuple[FrictionProblem, FrictionState]:
+        """The problem with the gauge released at ``sigma`` (m) and its start state: rigid
+        motions ``y = [t, v, φ]`` (axial float, cross-axis translation, rotation about the
+        area centroid; m, m, rad), external load ``P0 + α direction`` with ``P0`` the gauge
+        reaction and ``direction = [force (N), torque (N·m)]`` per unit ``α``; the pads
+        stay where the squeeze left them."""
         if self.problem is None:
             raise GraspError("the pads do not squeeze the part on this axis")
         prob = self.problem
@@ -231,7 +241,7 @@ class FrictionalCurve:
         incrementally from the squeezed state with the gauge released."""
         P0 = np.array(self.gauge_reaction(sigma))
         target = np.array([P0[0] if force is None else force, P0[1] if torque is None else torque])
-        lp, st = self._loading_problem(sigma, target - P0)
+        lp, st = self.loading_problem(sigma, target - P0)
         path = trace_friction(lp, st, 1.0, gap_tol=self.gap_tol, check_singular=True)
         reached = bool(path.ok and path.p[-1] >= 1.0)
         return LoadedGrasp(path.state(float(path.p[-1])), path, reached)
@@ -239,12 +249,12 @@ class FrictionalCurve:
     def hold_limit(self, sigma: float, direction: np.ndarray) -> float:
         """Largest load factor ``α`` (≥ 0) of the external load ``P0 + α direction``
         before gross slip (``inf`` if none)."""
-        lp, st = self._loading_problem(sigma, np.asarray(direction, float))
+        lp, st = self.loading_problem(sigma, np.asarray(direction, float))
         path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol, check_singular=True)
-        if not path.ok:
-            raise GraspError("the frictional loading found no consistent stick/slip state "
-                             "(non-unique quasi-static friction; try a smaller friction)")
-        return float(path.p[-1]) if path.limit else float("inf")
+        # No finite rate (gross slip), or no consistent stick/slip rate at all (the
+        # quasi-static path ends in a dynamic slip, as in Klarbring's examples for large μ):
+        # either way the grasp lets go beyond this load.
+        return float(path.p[-1]) if (path.limit or not path.ok) else float("inf")
 
     def hold(self, sigma: float) -> dict:
         """Holding force and torque at ``sigma`` (m) (module docstring):
