@@ -302,6 +302,8 @@ def test_every_breakpoint_obeys_coulomb(mu, angle, offset, width, radius, squeez
     fc = frictional_grasp(pc, curve, mu)
     length = curve.sigma0 - sigma_end
     _check_path(fc.problem, fc.path, fc.gap_tol, length)
+    # no boundary node outside the rows enters a pad
+    assert fc.penetration(pc) <= fc.gap_tol + 1e-9 * length
     # and a loading across the axis from the squeezed state, to the limit or 1 N
     lp, st0 = fc.loading_problem(sigma_end, np.array([load, 0.0]))
     path = trace_friction(lp, st0, 1.0, gap_tol=fc.gap_tol, check_singular=True)

@@ -48,6 +48,7 @@ optimalities", IJRR 33(6), 2014 (event-driven stick/slip on a linear FEM part).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -298,12 +299,62 @@ def _candidates(prob: FrictionProblem, st: FrictionState, g: np.ndarray, tols):
     return touching, releasing, on_cone, cone_dir
 
 
+def _violations(prob: FrictionProblem, mode: np.ndarray, rates, cands):
+    """Rows whose modes contradict their rates (``bad``) and the mode each would take
+    (``new``): the rate complementarity of the module docstring on the candidates."""
+    mu = prob.mu
+    r = prob.rows
+    touching, releasing, on_cone, cone_dir = cands
+    free = touching | releasing
+    dlam, dtau, dy = rates
+    dg = prob.gap_rate + prob.W[:r, :r] @ dlam + prob.W[:r, r:] @ dtau + prob.Bn.T @ dy
+    ds = prob.slip_rate + prob.W[r:, :r] @ dlam + prob.W[r:, r:] @ dtau + prob.Bt.T @ dy
+    ls = max(np.abs(dlam).max(initial=0.0), np.abs(dtau).max(initial=0.0), 1e-300)
+    gs = max(np.abs(dg).max(initial=0.0), np.abs(ds).max(initial=0.0),
+             np.abs(prob.gap_rate).max(initial=0.0), np.abs(prob.slip_rate).max(initial=0.0),
+             1e-300)
+    bad = np.zeros(r, bool)
+    new = mode.copy()
+    # touching / releasing rows: λ̇ ⊥ ġ
+    v = free & (mode == OPEN) & (dg < -_REL * gs)
+    bad |= v
+    new[v] = STICK if mu > 0 else SLIP_POS
+    v = free & (mode != OPEN) & (dlam < -_REL * ls)
+    bad |= v
+    new[v] = OPEN
+    if mu > 0:
+        slipping = (mode == SLIP_POS) | (mode == SLIP_NEG)
+        sg = np.where(mode == SLIP_POS, 1.0, -1.0)
+        # rows without force in contact: |τ̇| ≤ μ λ̇ when sticking, σ ṡ ≥ 0 when slipping
+        v = free & ~bad & (mode == STICK) & (np.abs(dtau) > mu * dlam + _REL * ls)
+        bad |= v
+        new[v] = np.where(dtau[v] < 0, SLIP_POS, SLIP_NEG)
+        v = free & ~bad & slipping & (sg * ds < -_REL * gs)
+        bad |= v
+        new[v] = STICK
+        # rows on the cone: stick needs μ λ̇ + σ τ̇ ≥ 0, slip needs σ ṡ ≥ 0
+        sc = np.where(cone_dir == SLIP_POS, 1.0, -1.0)
+        v = on_cone & (mode == STICK) & (mu * dlam + sc * dtau < -_REL * ls)
+        bad |= v
+        new[v] = cone_dir[v]
+        v = on_cone & slipping & (sg * ds < -_REL * gs)
+        bad |= v
+        new[v] = STICK
+    return bad, new
+
+
+#: Largest number of candidate mode combinations tried one by one when pivoting fails.
+_ENUMERATE = 4096
+
+
 def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
-    """Modes and rates of the next piece: principal pivoting on the candidates' modes.
+    """Modes and rates of the next piece: principal pivoting on the candidates' modes,
+    then (if it cycles) every combination of the candidates' modes up to
+    :data:`_ENUMERATE` of them.
 
     Returns ``(mode, rates)``; ``rates`` is ``None`` when the mode system is singular
-    (no finite rate: gross slip) and ``mode`` is ``None`` when no consistent modes were
-    found.
+    (no finite rate: gross slip) and ``mode`` is ``None`` when no consistent modes exist
+    (or, beyond the enumeration limit, none was found).
     """
     mu = prob.mu
     touching, releasing, on_cone, cone_dir = cands
@@ -323,44 +374,13 @@ def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
     r = prob.rows
     nflip_best, backup = r + 1, 3
     seen = set()
+    singular = None
     for _ in range(10 * r + 50):
         rates = _solve_rates(prob, mode, check_singular)
         if rates is None:
-            return mode, None
-        dlam, dtau, dy = rates
-        dg = prob.gap_rate + prob.W[:r, :r] @ dlam + prob.W[:r, r:] @ dtau + prob.Bn.T @ dy
-        ds = prob.slip_rate + prob.W[r:, :r] @ dlam + prob.W[r:, r:] @ dtau + prob.Bt.T @ dy
-        ls = max(np.abs(dlam).max(initial=0.0), np.abs(dtau).max(initial=0.0), 1e-300)
-        gs = max(np.abs(dg).max(initial=0.0), np.abs(ds).max(initial=0.0),
-                 np.abs(prob.gap_rate).max(initial=0.0), np.abs(prob.slip_rate).max(initial=0.0),
-                 1e-300)
-        bad = np.zeros(r, bool)
-        new = mode.copy()
-        # touching / releasing rows: λ̇ ⊥ ġ
-        v = free & (mode == OPEN) & (dg < -_REL * gs)
-        bad |= v
-        new[v] = STICK if mu > 0 else SLIP_POS
-        v = free & (mode != OPEN) & (dlam < -_REL * ls)
-        bad |= v
-        new[v] = OPEN
-        if mu > 0:
-            slipping = (mode == SLIP_POS) | (mode == SLIP_NEG)
-            sg = np.where(mode == SLIP_POS, 1.0, -1.0)
-            # rows without force in contact: |τ̇| ≤ μ λ̇ when sticking, σ ṡ ≥ 0 when slipping
-            v = free & ~bad & (mode == STICK) & (np.abs(dtau) > mu * dlam + _REL * ls)
-            bad |= v
-            new[v] = np.where(dtau[v] < 0, SLIP_POS, SLIP_NEG)
-            v = free & ~bad & slipping & (sg * ds < -_REL * gs)
-            bad |= v
-            new[v] = STICK
-            # rows on the cone: stick needs μ λ̇ + σ τ̇ ≥ 0, slip needs σ ṡ ≥ 0
-            sc = np.where(cone_dir == SLIP_POS, 1.0, -1.0)
-            v = on_cone & (mode == STICK) & (mu * dlam + sc * dtau < -_REL * ls)
-            bad |= v
-            new[v] = cone_dir[v]
-            v = on_cone & slipping & (sg * ds < -_REL * gs)
-            bad |= v
-            new[v] = STICK
+            singular = mode
+            break
+        bad, new = _violations(prob, mode, rates, cands)
         nbad = int(bad.sum())
         if nbad == 0:
             return mode, rates
@@ -380,6 +400,28 @@ def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
             i = int(np.flatnonzero(bad)[-1])       # one at a time (Murty's rule)
             mode = mode.copy()
             mode[i] = new[i]
+    # Pivoting cycled or met a singular system: try every combination of the candidates'
+    # modes (few rows are on a boundary at once). A consistent regular one wins; else a
+    # singular one means no finite rate; else none exists.
+    idx = np.flatnonzero(free | on_cone)
+    if mu == 0:
+        choices = [(OPEN, SLIP_POS) for _ in idx]
+    else:
+        choices = [(OPEN, STICK, SLIP_POS, SLIP_NEG) if free[i] else (STICK, int(cone_dir[i]))
+                   for i in idx]
+    if np.prod([len(c) for c in choices], dtype=float) <= _ENUMERATE:
+        base = mode.copy()
+        for combo in itertools.product(*choices):
+            trial = base.copy()
+            trial[idx] = combo
+            rates = _solve_rates(prob, trial, check_singular)
+            if rates is None:
+                singular = trial
+                continue
+            if not _violations(prob, trial, rates, cands)[0].any():
+                return trial, rates
+    if singular is not None:
+        return singular, None
     return None, None
 
 

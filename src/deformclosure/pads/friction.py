@@ -203,6 +203,47 @@ class FrictionalCurve:
         moment = float(np.sum(self.arm[:, 0] * f[:, 1] - self.arm[:, 1] * f[:, 0]))
         return -float((f @ n).sum()), -moment
 
+    def penetration(self, pad_contact: PadContact) -> float:
+        """Largest penetration (m, ≥ 0) of a boundary node that is not one of the rows
+        into a pad at any breakpoint of the frictional path (gaps are linear on every
+        piece, so the breakpoints decide). The rows are the frictionless curve's; friction
+        changes the displacements, so a node it did not need could in principle close."""
+        c = self.curve
+        if self.problem is None or self._frictionless():
+            return 0.0
+        loop = next(lp for lp in pad_contact.mesh.loops if np.isin(c.nodes[0], lp))
+        s, x = c.axis.coordinates(pad_contact.mesh.nodes[loop])
+        d, slope = c.pad.profile(x)
+        inside = np.isfinite(d)
+        rest_a = s - c.touch.z_a + d
+        rest_b = c.touch.z_b + d - s
+        far = 4.0 * float(self.path.p[-1]) + self.gap_tol
+        check = np.flatnonzero(inside & ((rest_a <= far) | (rest_b <= far)))
+        if len(check) == 0:
+            return 0.0
+        Y = pad_contact.Y
+        pos_c = pad_contact.position(c.nodes)
+        cd = np.column_stack([2 * pos_c, 2 * pos_c + 1]).ravel()
+        pos_l = pad_contact.position(loop[check])
+        ld = np.column_stack([2 * pos_l, 2 * pos_l + 1]).ravel()
+        path = self.path
+        F = (path.lam[:, :, None] * c.normals[None] + path.tau[:, :, None] * self.tangents[None])
+        u = (F.reshape(len(path.p), -1) @ Y[np.ix_(cd, ld)]).reshape(len(path.p), len(check), 2)
+        a, n = c.axis.direction, c.axis.normal
+        ua, un = u @ a, u @ n
+        sl = slope[check]
+        D, t = path.p[:, None], path.y[:, :1]
+        gA = rest_a[check] + ua + sl * un + t
+        gB = rest_b[check] - D - ua + sl * un - t
+        worst = 0.0
+        for g, pad in ((gA, 0), (gB, 1)):
+            rows = np.zeros(pad_contact.mesh.n_nodes, bool)
+            rows[c.nodes[c.pad_of == pad]] = True
+            other = ~rows[loop[check]]
+            if other.any():
+                worst = max(worst, float(-g[:, other].min()))
+        return max(worst, 0.0)
+
     # ------------------------------------------------------------------ loading
     def loading_problem(self, sigma: float, direction: np.ndarray) -> tuple[FrictionProblem, FrictionState]:
         """The problem with the gauge released at ``sigma`` (m) and its start state: rigid
