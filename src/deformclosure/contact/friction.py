@@ -52,6 +52,7 @@ import itertools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.linalg.lapack import dgecon, dgetrf, dgetrs
 
 __all__ = ["FrictionProblem", "FrictionState", "FrictionPath", "trace_friction",
            "OPEN", "STICK", "SLIP_POS", "SLIP_NEG"]
@@ -230,17 +231,15 @@ def _rate_system(prob: FrictionProblem, J: np.ndarray, mode: np.ndarray):
     rhs[:nj] = -prob.gap_rate[J]
     # tangential rows: ṡ = 0 (stick) or τ̇ + μ σ λ̇ = 0 (slip)
     mj = mode[J]
-    for a in range(nj):
-        row = nj + a
-        if mj[a] == STICK:
-            A[row, :nj] = W[Jt[a], J]
-            A[row, nj:2 * nj] = W[Jt[a], Jt]
-            A[row, 2 * nj:] = prob.Bt[:, J[a]]
-            rhs[row] = -prob.slip_rate[J[a]]
-        else:
-            sgn = 1.0 if mj[a] == SLIP_POS else -1.0
-            A[row, nj + a] = 1.0
-            A[row, a] = mu * sgn
+    st = np.flatnonzero(mj == STICK)
+    sl = np.flatnonzero(mj != STICK)
+    rows = nj + st
+    A[rows, :nj] = W[np.ix_(Jt[st], J)]
+    A[rows, nj:2 * nj] = W[np.ix_(Jt[st], Jt)]
+    A[rows, 2 * nj:] = prob.Bt[:, J[st]].T
+    rhs[rows] = -prob.slip_rate[J[st]]
+    A[nj + sl, nj + sl] = 1.0
+    A[nj + sl, sl] = mu * np.where(mj[sl] == SLIP_POS, 1.0, -1.0)
     # balance rows
     A[2 * nj:, :nj] = prob.Bn[:, J]
     A[2 * nj:, nj:2 * nj] = prob.Bt[:, J]
@@ -261,14 +260,16 @@ def _solve_rates(prob: FrictionProblem, mode: np.ndarray, check_singular: bool):
     As = A * s[:, None] * c[None, :]
     b = rhs * s
     x = None
-    if not check_singular:
-        try:
-            x = np.linalg.solve(As, b)
-        except np.linalg.LinAlgError:
-            x = None
-        if x is not None and not (np.all(np.isfinite(x))
-                                  and np.linalg.norm(As @ x - b) <= _RESIDUAL * max(np.linalg.norm(b), 1e-300)):
-            x = None
+    # LU with LAPACK's condition estimate; a (numerically) singular system goes to the
+    # least-norm solve below
+    lu, piv, info = dgetrf(As)
+    if info == 0:
+        rcond, _ = dgecon(lu, np.abs(As).sum(axis=0).max(), norm="1")
+        if rcond > _RCOND:
+            x, _ = dgetrs(lu, piv, b)
+            if not (np.all(np.isfinite(x)) and np.linalg.norm(As @ x - b)
+                    <= _RESIDUAL * max(np.linalg.norm(b), 1e-300)):
+                x = None
     if x is None:
         # A rigid motion the modes leave free (a frictionless pad's sliding direction) is
         # harmless when the equations are consistent: the least-norm rate. Inconsistent
