@@ -282,6 +282,16 @@ def _check_path(prob, path, gap_tol, length):
         assert (ds[mode == SLIP_POS] >= -1e-9 * slip_scale).all()
         assert (ds[mode == SLIP_NEG] <= 1e-9 * slip_scale).all()
         assert not ds[mode == OPEN].any()
+        # slipping rows are on the cone, against their slip, at both ends of the piece
+        for sign, which in ((1.0, SLIP_POS), (-1.0, SLIP_NEG)):
+            on = mode == which
+            for k in (i, i + 1):
+                assert np.abs(path.tau[k][on] + sign * mu * path.lam[k][on]).max(initial=0.0) \
+                    <= 1e-9 * scale
+    # the forces balance the load at every breakpoint
+    for k in range(len(path.p)):
+        res = prob.Bn @ path.lam[k] + prob.Bt @ path.tau[k] - prob.load - path.p[k] * prob.load_rate
+        assert np.abs(res).max() <= 1e-9 * max(scale, np.abs(prob.load_rate).max() * abs(path.p[k]))
     assert r == path.lam.shape[1]
 
 
