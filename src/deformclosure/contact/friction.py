@@ -49,7 +49,7 @@ optimalities", IJRR 33(6), 2014 (event-driven stick/slip on a linear FEM part).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg.lapack import dgecon, dgetrf, dgetrs
@@ -183,7 +183,6 @@ class FrictionPath:
     energy_coef: np.ndarray
     limit: bool = False
     ok: bool = True
-    _unused: tuple = field(default=(), repr=False, compare=False)
 
     def piece(self, p: float) -> int:
         """Index of the piece holding ``p`` (clipped to the traced range)."""
@@ -450,6 +449,20 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
         ``limit`` is True when the path ended at a singular mode system;
         ``p[-1] = inf`` never occurs: a final piece without events and ``p_end = inf``
         ends with ``limit = False`` at the last breakpoint (no finite limit).
+
+    Examples
+    --------
+    One node pressed into a pad (its gap closes at 1 m per unit ``p``) that also drags it
+    sideways (1 m per unit ``p``), unit compliances (m/N), ``μ = 0.5``: sticking would need
+    ``|τ| = λ``, so it slips from the start, ``τ = −μ λ``, and slips by half the drag:
+
+    >>> prob = FrictionProblem(np.eye(2), np.zeros(1), -np.ones(1), np.ones(1),
+    ...                        np.zeros((0, 1)), np.zeros((0, 1)), np.zeros(0), np.zeros(0), 0.5)
+    >>> start = FrictionState(0.0, np.zeros(1), np.zeros(1), np.zeros(0), np.zeros(1),
+    ...                       np.zeros(1, int))
+    >>> path = trace_friction(prob, start, 1.0, gap_tol=1e-12)
+    >>> path.lam[-1].tolist(), path.tau[-1].tolist(), path.slip[-1].tolist(), path.mode.tolist()
+    ([1.0], [-0.5], [0.5], [[2]])
     """
     r, k = prob.rows, len(prob.load)
     mu = prob.mu
@@ -540,7 +553,3 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
     return FrictionPath(P, Lm, Tm, np.array(Yv).reshape(len(P), k), np.array(S), modes, coef,
                         limit, ok)
 
-
-def continued(state: FrictionState, p: float) -> FrictionState:
-    """``state`` at a new parameter origin ``p`` (the forces and modes unchanged)."""
-    return replace(state, p=float(p))
