@@ -441,3 +441,29 @@ def test_cattaneo_mindlin_stick_zone():
         assert ms[i0 - 1] != STICK and ms[i1 + 1] != STICK
         c = 0.25 * ((xs[i1] + xs[i1 + 1]) - (xs[i0] + xs[i0 - 1]))
         assert c == pytest.approx(a * math.sqrt(1 - ratio), rel=0.05)
+
+
+def test_expanding_grasp_inside_a_hole():
+    """Pads opening inside the hole of examples/plate_with_hole.json: μ = 0 is the
+    frictionless curve bit for bit; with μ = 0.5 every breakpoint obeys Coulomb and no
+    boundary node enters a pad."""
+    from pathlib import Path
+
+    part = dc.Part.from_file(Path(__file__).resolve().parents[1] / "examples" / "plate_with_hole.json")
+    mesh = dc.mesh_part(part)
+    pc = PadContact(mesh)
+    centre = mesh.nodes[mesh.hole_loops[0]].mean(axis=0)
+    axis = GraspAxis.at(centre, 0.3, tuple(pc.centroid))
+    pad = Pad(0.0, 0.5 * MM)
+    sigma0 = pc.curve(axis, pad, 0.0, hole=0).sigma0
+    curve = pc.curve(axis, pad, 1.05 * sigma0, hole=0)
+    assert curve.expanding and curve.path is not None
+    fc0 = frictional_grasp(pc, curve, 0.0)
+    for sigma in np.linspace(sigma0, 1.05 * sigma0, 7):
+        assert fc0.energy(sigma) == float(curve.energy(sigma))
+        assert np.array_equal(fc0.forces(sigma)[0], curve.path.multipliers(curve.delta(sigma)))
+    fc = frictional_grasp(pc, curve, 0.5)
+    _check_path(fc.problem, fc.path, fc.gap_tol, 0.05 * sigma0)
+    assert fc.penetration(pc) <= fc.gap_tol
+    f_minus, f_plus = fc.hold(1.03 * sigma0)["force"]
+    assert f_minus < 0 < f_plus

@@ -215,8 +215,8 @@ class FrictionalCurve:
         s, x = c.axis.coordinates(pad_contact.mesh.nodes[loop])
         d, slope = c.pad.profile(x)
         inside = np.isfinite(d)
-        rest_a = s - c.touch.z_a + d
-        rest_b = c.touch.z_b + d - s
+        # the curve's own rest gaps (expanding: the ring behind a pad cannot touch it)
+        rest_a, rest_b = pad_contact._rest_gaps(s, d, c.touch)
         far = 4.0 * float(self.path.p[-1]) + self.gap_tol
         check = np.flatnonzero(inside & ((rest_a <= far) | (rest_b <= far)))
         if len(check) == 0:
@@ -239,7 +239,7 @@ class FrictionalCurve:
         for g, pad in ((gA, 0), (gB, 1)):
             rows = np.zeros(pad_contact.mesh.n_nodes, bool)
             rows[c.nodes[c.pad_of == pad]] = True
-            other = ~rows[loop[check]]
+            other = ~rows[loop[check]] & np.isfinite(rest_a[check] if pad == 0 else rest_b[check])
             if other.any():
                 worst = max(worst, float(-g[:, other].min()))
         return max(worst, 0.0)
