@@ -467,3 +467,19 @@ def test_expanding_grasp_inside_a_hole():
     assert fc.penetration(pc) <= fc.gap_tol
     f_minus, f_plus = fc.hold(1.03 * sigma0)["force"]
     assert f_minus < 0 < f_plus
+
+
+def test_rows_the_frictional_path_needs_are_added():
+    """A curve stripped of every other face row on pad B: the frictional path would push
+    those nodes into the pad, so the rows of a longer frictionless curve are taken, and the
+    result is the full curve's."""
+    _, pc, curve = _pinch(2.0)
+    keep = (curve.pad_of == 0) | (np.arange(len(curve.nodes)) % 2 == 0)
+    stripped = replace(curve, nodes=curve.nodes[keep], pad_of=curve.pad_of[keep],
+                       normals=curve.normals[keep])
+    full = frictional_grasp(pc, curve, 0.5)
+    fixed = frictional_grasp(pc, stripped, 0.5)
+    assert len(fixed.curve.nodes) >= len(curve.nodes) > len(stripped.nodes)
+    assert fixed.penetration(pc) <= fixed.gap_tol
+    assert fixed.energy(SIGMA) == pytest.approx(full.energy(SIGMA), rel=1e-9)
+    assert fixed.axial_force(SIGMA) == pytest.approx(full.axial_force(SIGMA), rel=1e-9)

@@ -81,6 +81,10 @@ class FrictionalCurve:
     tangents : ndarray, shape (r, 2)
     arm : ndarray, shape (r, 2)
         Rest positions of the rows' nodes relative to the area centroid (m).
+    gap_tol : float
+        Gaps below this (m) count as closed.
+    delta_max : float
+        The squeeze (m) traced (the frictionless curve's range).
     """
 
     curve: GraspCurve
@@ -90,6 +94,7 @@ class FrictionalCurve:
     tangents: np.ndarray
     arm: np.ndarray
     gap_tol: float
+    delta_max: float
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # ------------------------------------------------------------------ squeeze
@@ -98,9 +103,10 @@ class FrictionalCurve:
         if c.touch is None or c.path is None:
             raise GraspError("the pads do not squeeze the part on this axis")
         d = float(c.delta(sigma))
-        hi = float(c.path.delta[-1])
+        hi = self.delta_max
         if d > hi * (1 + 1e-12):
-            raise GraspError(f"sigma = {sigma!r} m: beyond the traced range (σ ≥ {c.sigma_end!r} m)")
+            raise GraspError(f"sigma = {sigma!r} m: beyond the traced range "
+                             f"(σ ≥ {float(c.sigma_at(hi))!r} m)")
         return min(d, hi)
 
     def _frictionless(self) -> bool:
@@ -310,23 +316,9 @@ class FrictionalCurve:
         return out
 
 
-def frictional_grasp(pad_contact: PadContact, curve: GraspCurve, mu: float) -> FrictionalCurve:
-    """The frictional squeeze of ``curve``'s axis with Coulomb coefficient ``mu`` over the
-    curve's traced range (module docstring).
-
-    At ``mu = 0`` the frictionless path of ``curve`` is used as it is (SPEC §9: §6
-    exactly).
-
-    Examples
-    --------
-    See ``docs/friction.md``.
-    """
-    if not (isinstance(mu, (int, float)) and np.isfinite(mu) and mu >= 0):
-        raise GraspError(f"friction = {mu!r}: the Coulomb coefficient must be a finite number ≥ 0")
-    mu = float(mu)
-    tol = 1e-10 * pad_contact.diameter
-    if curve.touch is None or curve.path is None:
-        return FrictionalCurve(curve, mu, None, None, np.zeros((0, 2)), np.zeros((0, 2)), tol)
+def _squeeze(pad_contact: PadContact, curve: GraspCurve, mu: float, delta_max: float, tol: float):
+    """The squeeze problem on ``curve``'s rows and (``mu > 0``) its frictional path to
+    ``delta_max`` (m); returns ``(problem, path, tangents, arms)``."""
     nodes, nrm, pad_of = curve.nodes, curve.normals, curve.pad_of
     tan = ContactProblem(np.zeros((len(nodes), len(nodes))), np.zeros(len(nodes)),
                          normals=nrm).tangents()
@@ -345,7 +337,7 @@ def frictional_grasp(pad_contact: PadContact, curve: GraspCurve, mu: float) -> F
                            np.zeros(1), np.zeros(1), mu)
     arm = pad_contact.mesh.nodes[nodes] - pad_contact.centroid
     if mu == 0:
-        return FrictionalCurve(curve, mu, prob, None, tan, arm, tol)
+        return prob, None, tan, arm
     # first touch on the nodes, as the frictionless path: translate until pad A touches,
     # squeeze until pad B does
     A, B = e > 0, e < 0
@@ -354,8 +346,50 @@ def frictional_grasp(pad_contact: PadContact, curve: GraspCurve, mu: float) -> F
     r = len(nodes)
     start = FrictionState(d0, np.zeros(r), np.zeros(r), np.array([t0]), np.zeros(r),
                           np.zeros(r, int))
-    path = trace_friction(prob, start, float(curve.path.delta[-1]), gap_tol=tol)
-    if not path.ok:
-        raise GraspError("the frictional squeeze found no consistent stick/slip state "
-                         "(non-unique quasi-static friction; try a smaller friction)")
-    return FrictionalCurve(curve, mu, prob, path, tan, arm, tol)
+    path = trace_friction(prob, start, delta_max, gap_tol=tol)
+    if not path.ok or path.limit or path.p[-1] < delta_max * (1 - 1e-12):
+        raise GraspError(f"friction = {mu!r}: the frictional squeeze has no quasi-static "
+                         f"stick/slip solution beyond a squeeze of {path.p[-1]!r} m "
+                         "(Coulomb friction this large need not have one); try a smaller friction")
+    return prob, path, tan, arm
+
+
+def frictional_grasp(pad_contact: PadContact, curve: GraspCurve, mu: float) -> FrictionalCurve:
+    """The frictional squeeze of ``curve``'s axis with Coulomb coefficient ``mu`` over the
+    curve's traced range (module docstring).
+
+    At ``mu = 0`` the frictionless path of ``curve`` is used as it is (SPEC §9: §6
+    exactly). With friction the rows are ``curve``'s; if the frictional path makes another
+    boundary node enter a pad, the rows of the frictionless curve traced twice as far are
+    taken instead (up to three times).
+
+    Raises
+    ------
+    GraspError
+        A friction coefficient that is not a finite number ≥ 0, or a squeeze without a
+        quasi-static solution.
+
+    Examples
+    --------
+    See ``docs/friction.md``.
+    """
+    if not (isinstance(mu, (int, float)) and np.isfinite(mu) and mu >= 0):
+        raise GraspError(f"friction = {mu!r}: the Coulomb coefficient must be a finite number ≥ 0")
+    mu = float(mu)
+    tol = 1e-10 * pad_contact.diameter
+    if curve.touch is None or curve.path is None:
+        return FrictionalCurve(curve, mu, None, None, np.zeros((0, 2)), np.zeros((0, 2)), tol, 0.0)
+    delta_max = float(curve.path.delta[-1])
+    hole = None
+    if curve.expanding:
+        hole = next(k for k, lp in enumerate(pad_contact.mesh.hole_loops) if np.isin(curve.nodes[0], lp))
+    rows, reach = curve, delta_max
+    for _ in range(4):
+        prob, path, tan, arm = _squeeze(pad_contact, rows, mu, delta_max, tol)
+        fc = FrictionalCurve(rows, mu, prob, path, tan, arm, tol, delta_max)
+        if mu == 0 or fc.penetration(pad_contact) <= tol + 1e-9 * delta_max:
+            return fc
+        reach *= 2.0
+        rows = pad_contact.curve(curve.axis, curve.pad, curve.sigma_at(reach), hole)
+    raise GraspError("the frictional squeeze makes boundary nodes enter a pad that the "
+                     "contact rows do not hold; refine the mesh under the pads")
