@@ -134,6 +134,10 @@ def test_block_holding_force_is_mu_times_pad_forces(max_area):
     # a block between fixed parallel pads cannot turn (its diagonal is longer than the
     # pad separation): the linear kinematics jams, no finite holding torque
     assert hold["torque"] == [-math.inf, math.inf]
+    # flat pads add no geometric resistance to a cross force: friction's limit is the hold
+    assert hold["slide"]["force"] == hold["force"]
+    # and under a torque the jammed corners stick for ever: friction is never exhausted
+    assert hold["slide"]["torque"] == [-math.inf, math.inf]
 
 
 def test_frictionless_block_holds_no_cross_force():

@@ -24,8 +24,13 @@ an external load with the gauge's distributions takes the gauge reaction's place
 sign. The same event-driven solver follows ``α`` with the pads fixed until no finite rate
 exists (every row that could hold has reached the cone: gross slip); ``hold`` is the
 external load there, ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m)}`` (``f− ≤ P0 ≤
-f+``). A grasp the linearised kinematics never lets go of (a block between fixed flat
-pads jams under a torque: its diagonal is longer than the pad separation) has ``±inf``.
+f+``). A grasp the linearised kinematics never lets go of has ``±inf``: a block between
+fixed flat pads jams under a torque (its diagonal is longer than the pad separation),
+and a part pressed into round pads on both flanks of their apex is wedged across the
+axis, friction or not — that resistance is geometric (leaving it is large motion: the
+release landscape's question). ``hold["slide"]`` gives, for the same loads, where every
+contact row first slides (the friction is exhausted); for flat pads under a cross force
+it equals the hold (``docs/friction.md``).
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..contact.friction import (OPEN, SLIP_POS, FrictionPath, FrictionProblem, FrictionState,
+from ..contact.friction import (OPEN, SLIP_POS, STICK, FrictionPath, FrictionProblem, FrictionState,
                                 trace_friction)
 from ..contact.solve import ContactProblem
 from ..errors import GraspError
@@ -293,25 +298,41 @@ class FrictionalCurve:
         reached = bool(path.ok and path.p[-1] >= 1.0)
         return LoadedGrasp(path.state(float(path.p[-1])), path, reached)
 
-    def hold_limit(self, sigma: float, direction: np.ndarray) -> float:
-        """Largest load factor ``α`` (≥ 0) of the external load ``P0 + α direction``
-        before gross slip (``inf`` if none)."""
+    def hold_limit(self, sigma: float, direction: np.ndarray) -> tuple[float, float]:
+        """Load factors ``α`` (≥ 0) of the external load ``P0 + α direction``: before gross
+        slip (``inf`` if none), and where every contact row first slides (friction
+        exhausted; ``≤`` the first)."""
         lp, st = self.loading_problem(sigma, np.asarray(direction, float))
         path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol, check_singular=True)
         # No finite rate (gross slip), or no consistent stick/slip rate at all (the
         # quasi-static path ends in a dynamic slip, as in Klarbring's examples for large μ):
         # either way the grasp lets go beyond this load.
-        return float(path.p[-1]) if (path.limit or not path.ok) else float("inf")
+        limit = float(path.p[-1]) if (path.limit or not path.ok) else float("inf")
+        slide = limit
+        for i, mode in enumerate(path.mode):
+            if (mode != OPEN).any() and not (mode == STICK).any():
+                slide = float(path.p[i])
+                break
+        return limit, slide
 
     def hold(self, sigma: float) -> dict:
         """Holding force and torque at ``sigma`` (m) (module docstring):
-        ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m)}``."""
+        ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m), "slide": {"force": [..],
+        "torque": [..]}}`` — ``slide``: the loads at which every contact row first slides
+        (the friction is exhausted). For flat pads the two agree; where the pads' curvature
+        wedges the part or it jams, the linear kinematics holds beyond ``slide`` (up to
+        ``±inf``): that resistance is geometric, and its strength is the release
+        landscape's question (SPEC §6, §9), not friction's."""
         key = float(sigma)
         if key in self._cache:
             return self._cache[key]
         F0, M0 = self.gauge_reaction(sigma)
-        out = {"force": [F0 - self.hold_limit(sigma, [-1.0, 0.0]), F0 + self.hold_limit(sigma, [1.0, 0.0])],
-               "torque": [M0 - self.hold_limit(sigma, [0.0, -1.0]), M0 + self.hold_limit(sigma, [0.0, 1.0])]}
+        lim = {k: self.hold_limit(sigma, d) for k, d in
+               (("f-", [-1.0, 0.0]), ("f+", [1.0, 0.0]), ("t-", [0.0, -1.0]), ("t+", [0.0, 1.0]))}
+        out = {"force": [F0 - lim["f-"][0], F0 + lim["f+"][0]],
+               "torque": [M0 - lim["t-"][0], M0 + lim["t+"][0]],
+               "slide": {"force": [F0 - lim["f-"][1], F0 + lim["f+"][1]],
+                         "torque": [M0 - lim["t-"][1], M0 + lim["t+"][1]]}}
         self._cache[key] = out
         return out
 
