@@ -171,7 +171,7 @@ class FrictionPath:
         Whether the path ended because no finite rate exists (gross slip: the load
         parameter cannot grow beyond ``p[-1]``).
     ok : bool
-        False when the mode pivoting found no consistent modes (the path ends there).
+        False when no consistent modes exist (the quasi-static path ends there).
     """
 
     p: np.ndarray
@@ -246,7 +246,7 @@ def _rate_system(prob: FrictionProblem, J: np.ndarray, mode: np.ndarray):
     return A, rhs
 
 
-def _solve_rates(prob: FrictionProblem, mode: np.ndarray, check_singular: bool):
+def _solve_rates(prob: FrictionProblem, mode: np.ndarray):
     """Rates ``(λ̇, τ̇, ẏ)`` of the modes, or ``None`` if the mode system is singular."""
     r, k = prob.rows, len(prob.load)
     J = np.flatnonzero(mode != OPEN)
@@ -347,7 +347,7 @@ def _violations(prob: FrictionProblem, mode: np.ndarray, rates, cands):
 _ENUMERATE = 4096
 
 
-def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
+def _choose_modes(prob, st: FrictionState, cands):
     """Modes and rates of the next piece: principal pivoting on the candidates' modes,
     then (if it cycles) every combination of the candidates' modes up to
     :data:`_ENUMERATE` of them.
@@ -376,7 +376,7 @@ def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
     seen = set()
     singular = None
     for _ in range(10 * r + 50):
-        rates = _solve_rates(prob, mode, check_singular)
+        rates = _solve_rates(prob, mode)
         if rates is None:
             singular = mode
             break
@@ -414,7 +414,7 @@ def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
         for combo in itertools.product(*choices):
             trial = base.copy()
             trial[idx] = combo
-            rates = _solve_rates(prob, trial, check_singular)
+            rates = _solve_rates(prob, trial)
             if rates is None:
                 singular = trial
                 continue
@@ -426,8 +426,7 @@ def _choose_modes(prob, st: FrictionState, cands, check_singular: bool):
 
 
 def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
-                   gap_tol: float, check_singular: bool = False, max_pieces: int = 20000
-                   ) -> FrictionPath:
+                   gap_tol: float, max_pieces: int = 20000) -> FrictionPath:
     """Follow the frictional path of ``prob`` from ``start`` to ``p_end`` (module docstring).
 
     Parameters
@@ -436,17 +435,17 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
     start : FrictionState
         A consistent state (e.g. first touch: every force zero, every mode ``OPEN``).
     p_end : float
-        Last parameter value (may be ``inf`` with ``check_singular``: trace to the limit).
+        Last parameter value (may be ``inf``: trace to the limit).
     gap_tol : float
         Gaps below this (m) count as closed.
-    check_singular : bool
-        Whether a singular mode system ends the path as the limit (holding loads).
     max_pieces : int
+        Most pieces traced.
 
     Returns
     -------
     FrictionPath
-        ``limit`` is True when the path ended at a singular mode system;
+        ``limit`` is True when the path ended at a mode system without solution (no
+        finite rate: with free rigid motions, gross slip);
         ``p[-1] = inf`` never occurs: a final piece without events and ``p_end = inf``
         ends with ``limit = False`` at the last breakpoint (no finite limit).
 
@@ -477,7 +476,7 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
         lam_scale = max(np.abs(st.lam).max(initial=0.0), 1e-300)
         cands = _candidates(prob, st, g, (gap_tol, 1e-12 * lam_scale))
         touching, releasing, on_cone, _ = cands
-        mode, rates = _choose_modes(prob, st, cands, check_singular)
+        mode, rates = _choose_modes(prob, st, cands)
         if mode is None:
             ok = False
             break

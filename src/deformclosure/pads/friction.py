@@ -294,7 +294,7 @@ class FrictionalCurve:
         P0 = np.array(self.gauge_reaction(sigma))
         target = np.array([P0[0] if force is None else force, P0[1] if torque is None else torque])
         lp, st = self.loading_problem(sigma, target - P0)
-        path = trace_friction(lp, st, 1.0, gap_tol=self.gap_tol, check_singular=True)
+        path = trace_friction(lp, st, 1.0, gap_tol=self.gap_tol)
         reached = bool(path.ok and path.p[-1] >= 1.0)
         return LoadedGrasp(path.state(float(path.p[-1])), path, reached)
 
@@ -303,7 +303,7 @@ class FrictionalCurve:
         slip (``inf`` if none), and where every contact row first slides (friction
         exhausted; ``≤`` the first)."""
         lp, st = self.loading_problem(sigma, np.asarray(direction, float))
-        path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol, check_singular=True)
+        path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol)
         # No finite rate (gross slip), or no consistent stick/slip rate at all (the
         # quasi-static path ends in a dynamic slip, as in Klarbring's examples for large μ):
         # either way the grasp lets go beyond this load.
