@@ -123,9 +123,12 @@ class FrictionalCurve:
         if self._frictionless():
             cp = self.curve.path
             lam = cp.multipliers(delta)
-            i = int(cp.piece(np.array(delta)))
-            w = 0.0 if delta <= cp.delta[0] else (delta - cp.delta[i]) / (cp.delta[i + 1] - cp.delta[i])
-            t = (1 - w) * cp.t[i] + w * cp.t[i + 1]
+            if len(cp.delta) < 2 or delta <= cp.delta[0]:
+                t = cp.t[0]
+            else:
+                i = int(cp.piece(np.array(delta)))
+                w = (delta - cp.delta[i]) / (cp.delta[i + 1] - cp.delta[i])
+                t = (1 - w) * cp.t[i] + w * cp.t[i + 1]
             mode = np.where(lam > 0, SLIP_POS, OPEN)
             return FrictionState(delta, lam, np.zeros_like(lam), np.array([t]),
                                  self._frictionless_slip(delta), mode)
