@@ -17,8 +17,8 @@ translation and rotation)::
 * balance rows — the polished dual QP (:mod:`.qp`), the equilibrium of ``check``;
 * a squeeze path — the parametric active-set method (:mod:`.path`), the pads.
 
-Rows carry their unit normals; friction (SPEC §9) will add the tangents ``t = (−n_y, n_x)``
-of the same rows (:meth:`ContactProblem.tangents`).
+Rows carry their unit normals; Coulomb friction (SPEC §9, :mod:`.friction`) adds the
+tangents ``t = (−n_y, n_x)`` of the same rows (:meth:`ContactProblem.tangents`).
 """
 
 from __future__ import annotations
