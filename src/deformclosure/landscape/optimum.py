@@ -319,10 +319,11 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
     finite-strain energies are smooth between contact events, not piecewise quadratic).
 
     ``n_samples`` evenly spaced values of ``x`` (the ends included) locate the best
-    sample; the bracket of its two neighbours is then halved around the best point (both
-    half-way points evaluated, the best of the three kept) until the bracket is narrower
-    than ``x_tol`` or the best value has moved by less than ``rtol / 4`` (relative)
-    in two successive halvings. Samples
+    sample; the bracket of its two neighbours is then narrowed around the best point (both
+    half-way points evaluated, the best kept, the bracket shrunk to its neighbours) until
+    the bracket is narrower than ``x_tol`` or the steeper slope from the best point to the
+    bracket's ends, times the bracket, is within ``rtol / 4`` of ``Q*`` — a bound on how
+    much higher a peak inside the bracket could be. Samples
     rank by :func:`better` (larger ``Q``, then ``toward`` the upper end, the least
     squeeze).
 
@@ -355,17 +356,27 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
         return None
     a = float(xs[max(k_best - 1, 0)])
     b = float(xs[min(k_best + 1, len(xs) - 1)])
-    stable = 0
+    Qa = float(quality(a)) if a != best.x else best.Q
+    Qb = float(quality(b)) if b != best.x else best.Q
     while b - a > x_tol:
-        prev = best.Q
+        # Inside [a, b] Q can exceed the best sample by at most the steeper of the two
+        # slopes from it to the bracket's ends times the bracket (a peak, even a kink of
+        # a max-min, is where those slopes change sign): stop when that is within rtol/4.
+        slope = max(abs(best.Q - Qa) / max(best.x - a, 1e-300),
+                    abs(best.Q - Qb) / max(b - best.x, 1e-300))
+        if slope * (b - a) <= 0.25 * rtol * abs(best.Q):
+            break
         for x in (0.5 * (a + best.x), 0.5 * (best.x + b)):
             if a < x < b and x != best.x:
                 c = Candidate(float(quality(x)), x, True)
                 if better(c, best):
+                    if x < best.x:
+                        b, Qb = best.x, best.Q
+                    else:
+                        a, Qa = best.x, best.Q
                     best = c
-        half = 0.25 * (b - a)
-        a, b = max(a, best.x - half), min(b, best.x + half)
-        stable = stable + 1 if abs(best.Q - prev) <= 0.25 * rtol * abs(best.Q) else 0
-        if stable >= 2:
-            break
+                elif x < best.x:
+                    a, Qa = x, c.Q
+                else:
+                    b, Qb = x, c.Q
     return best.Q, best.x

@@ -124,11 +124,13 @@ class FiniteStrainCurve:
         a, n = self._a, self._n
         w = 0.5 * pad.width
         out = []
-        for s in (zA - pad.radius, zB + pad.radius):
+        # each pad is carried by its finger: the strip behind it (SPEC §6: the pads come
+        # from outside along the axis), so a part wrapping round a pad meets its flanks
+        for s, back in ((zA - pad.radius, -a), (zB + pad.radius, a)):
             p = o + s * a + (ax.offset - w) * n
             q = o + s * a + (ax.offset + w) * n
             out.append(CapsuleObstacle((float(p[0]), float(p[1])), (float(q[0]), float(q[1])),
-                                       pad.radius))
+                                       pad.radius, (float(back[0]), float(back[1]))))
         return out
 
     # ---------------------------------------------------------------- solving
@@ -161,6 +163,28 @@ class FiniteStrainCurve:
                                  else min(self.delta_failed, path.delta_failed))
             return None
         return path.states[-1]
+
+    def energy_near(self, sigma: float, other: "FiniteStrainCurve") -> float:
+        """:meth:`energy_at`, started (when this axis has no state yet) from ``other``'s
+        converged state at the same ``sigma``: a neighbouring axis of the landscape holds
+        the part in nearly the same shape, so one Newton solve replaces the trace from
+        first touch (the trace remains the fallback)."""
+        if self.touch is None or other.touch is None or self._states:
+            return self.energy_at(sigma)
+        d = self.delta(sigma)
+        d_other = other.delta(sigma)
+        if d <= self.delta0 or d_other <= other.delta0:
+            return self.energy_at(sigma)
+        seed = other.state(d_other)
+        if seed is None:
+            return self.energy_at(sigma)
+        trial = self.problem.solve(self.bodies_at(d), seed.u, seed.lam, seed.mu)
+        self.n_solves += 1
+        if trial.converged:
+            self._deltas.append(float(d))
+            self._states.append(trial)
+            return trial.energy
+        return self.energy_at(sigma)
 
     def reachable(self, sigma: float) -> bool:
         """Whether the squeeze at ``sigma`` (m) can be solved."""
