@@ -194,3 +194,46 @@ def test_gauge_rows_are_the_spec_functionals():
     n = axis.normal
     want = np.vstack([n[0] * G[0] + n[1] * G[1], G[2]])
     assert np.allclose(np.asarray(c.problem.G.todense()), want, rtol=0, atol=1e-14)
+
+
+# --------------------------------------------------------------------------- commands
+def test_elasticity_option_is_validated_in_one_line(capsys):
+    from deformclosure.cli.main import main
+
+    def run(*args):
+        code = main(list(args))
+        err = capsys.readouterr().err
+        assert "Traceback" not in err
+        return code, err
+
+    code, err = run("optimize", "examples/rectangle.json", "--axis", "6,10,0", "--pad-radius",
+                    "1", "--elasticity", "rubbery")
+    assert code == 2 and "--elasticity" in err and "neo-hookean" in err
+    code, err = run("optimize", "examples/rectangle.json", "--model", "paper", "--at", "0,10",
+                    "12,10", "--elasticity", "neo-hookean")
+    assert code == 2 and "only with the pads model" in err
+    code, err = run("check", "examples/l_shape.json", "--fingers",
+                    "examples/fingers/l_shape.json", "--elasticity", "neo-hookean")
+    assert code == 2 and "not supported by check yet" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_optimize_neo_hookean_report_on_one_mesh():
+    """One mesh (--refine 1) of the notched bar: the report carries the finite-strain values,
+    the linear ones beside them and linear_model_error consistent with both."""
+    from deformclosure import reports
+
+    rep = reports.run("optimize", "examples/notched_bar.json",
+                      {"at": ("15,0", "15,12"), "pad_radius": 2.0, "refine": 1,
+                       "elasticity": "neo-hookean", "max_area": 0.4})
+    d = rep.data
+    assert d["elasticity"] == "neo-hookean" and d["U_A_is_upper_bound"] is True
+    lin, err = d["linear"], d["linear_model_error"]
+    assert d["sigma_star"] is not None and lin["sigma_star"] is not None
+    assert err["sigma_star"] == pytest.approx((lin["sigma_star"] - d["sigma_star"])
+                                              / d["sigma_star"])
+    assert err["quality"] == pytest.approx((lin["quality"] - d["quality"]) / d["quality"])
+    assert d["sigma_L"] < d["sigma_star"] < d["sigma0"]
+    assert d["force"] > 0
+    assert any("upper bound" in w for w in d["warnings"])

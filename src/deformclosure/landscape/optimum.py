@@ -314,7 +314,8 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
 
 
 def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_samples: int,
-                     rtol: float, x_tol: float) -> tuple[float, float] | None:
+                     rtol: float, x_tol: float,
+                     bound: Callable[[float], float] | None = None) -> tuple[float, float] | None:
     """``argmax Q`` on ``[lo, hi]`` for a ``Q`` known only by evaluation (SPEC §8: the
     finite-strain energies are smooth between contact events, not piecewise quadratic).
 
@@ -339,6 +340,10 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
         Relative accuracy of ``Q*`` to locate.
     x_tol : float
         Bracket width (m) at which the search stops regardless.
+    bound : callable, optional
+        A cheap upper bound ``x → B(x) ≥ Q(x)`` (J; e.g. ``U_L`` for ``Q = min(U_A, U_L)``):
+        samples are evaluated in order of decreasing bound, and a sample whose bound cannot
+        beat the best value found is not evaluated (it cannot win).
 
     Returns
     -------
@@ -348,8 +353,16 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
     xs = np.linspace(lo, hi, max(int(n_samples), 3))
     best: Candidate | None = None
     k_best = 0
-    for k, x in enumerate(xs):
-        c = Candidate(float(quality(float(x))), float(x), True)
+    order = range(len(xs))
+    bounds = None
+    if bound is not None:
+        bounds = [float(bound(float(x))) for x in xs]
+        order = sorted(order, key=lambda k: -bounds[k])
+    for k in order:
+        x = float(xs[k])
+        if bounds is not None and best is not None and bounds[k] < best.Q:
+            continue
+        c = Candidate(float(quality(x)), x, True)
         if better(c, best):
             best, k_best = c, k
     if best is None or not best.Q > 0:

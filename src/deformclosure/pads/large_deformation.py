@@ -144,11 +144,14 @@ class FiniteStrainCurve:
         k = bisect.bisect_left(self._deltas, delta)
         if k < len(self._deltas) and self._deltas[k] == delta:
             return self._states[k]
+        step = STEP_FRACTION * self.touch.sigma0
+        direct = self._direct(k, delta, step)
+        if direct is not None:
+            return direct
         if k > 0:
             start, d_start = self._states[k - 1], self._deltas[k - 1]
         else:
             start, d_start = None, self.delta0
-        step = STEP_FRACTION * self.touch.sigma0
         targets = list(np.arange(d_start + step, delta, step)) + [delta]
         path = follow_squeeze(self.problem, self.bodies_at, targets, start, d_start)
         self.n_solves += path.n_solves
@@ -185,6 +188,30 @@ class FiniteStrainCurve:
             self._states.append(trial)
             return trial.energy
         return self.energy_at(sigma)
+
+    def _direct(self, k: int, delta: float, step: float) -> ContactState | None:
+        """One Newton solve at ``delta`` from the states beside it (interpolated between the
+        two neighbours, or extrapolated from the two below), when the nearest is within a
+        step; ``None`` (the caller traces instead) when there is none or it fails."""
+        D, S = self._deltas, self._states
+        if k == 0 or delta - D[k - 1] > step:
+            return None
+        lo = S[k - 1]
+        if k < len(D):
+            w = (delta - D[k - 1]) / (D[k] - D[k - 1])
+            u0, l0 = lo.u + w * (S[k].u - lo.u), lo.lam + w * (S[k].lam - lo.lam)
+        elif k >= 2:
+            w = (delta - D[k - 1]) / (D[k - 1] - D[k - 2])
+            u0, l0 = lo.u + w * (lo.u - S[k - 2].u), lo.lam + w * (lo.lam - S[k - 2].lam)
+        else:
+            u0, l0 = lo.u, lo.lam
+        trial = self.problem.solve(self.bodies_at(delta), u0, np.maximum(l0, 0.0), lo.mu)
+        self.n_solves += 1
+        if not trial.converged:
+            return None
+        self._deltas.insert(k, float(delta))
+        self._states.insert(k, trial)
+        return trial
 
     def reachable(self, sigma: float) -> bool:
         """Whether the squeeze at ``sigma`` (m) can be solved."""

@@ -97,8 +97,13 @@ def _grid_graph(grid: AxisGrid) -> sp.csr_matrix:
 def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigma: int = 64,
               top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
               solver: PadContact | None = None, progress=None, part=None,
-              rtol: float | None = None, max_seconds: float | None = None) -> PadPlan:
+              rtol: float | None = None, max_seconds: float | None = None,
+              elasticity: str = "linear") -> PadPlan:
     """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
+
+    With ``elasticity="neo-hookean"`` the verified rows are re-solved at finite strain
+    (SPEC §8, :func:`~deformclosure.pads.finite_strain_grasp.finite_strain_levels`, the
+    code path of ``optimize --elasticity neo-hookean``); screening stays linear.
 
     Parameters
     ----------
@@ -182,7 +187,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
             for v, c in enumerate(curves) if c.touch is not None]
     rows.sort(key=lambda r: -r["quality"])
     refined = _verify_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets, part,
-                           rtol, max_seconds)
+                           rtol, max_seconds, elasticity)
     # verified rows first (held, then undecided, then not held), then the candidates
     order = {"held": 0, "undecided": 1, "not held": 2, "candidate": 3}
     rows.sort(key=lambda r: (not r["verified"], order[r["verdict"]] if r["verified"] else 0,
@@ -272,11 +277,12 @@ def screened_verdict(quality: float) -> str:
 
 def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
                  n_angles: int, n_offsets: int, part, rtol: float | None,
-                 max_seconds: float | None) -> list:
+                 max_seconds: float | None, elasticity: str = "linear") -> list:
     """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`
     to ``rtol``, grid anchored at each axis, twice the plan's angular resolution), updating
     them in place; stops at the first row that shows no barrier."""
     from ..pads.refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, pad_grasp
+    from ..pads.finite_strain_grasp import finite_strain_levels, optimize_finite_strain
     from ..mesh.generate import default_max_area
 
     first_gap = next((k for k, r in enumerate(rows) if r["quality"] <= 0), len(rows))
@@ -293,14 +299,21 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             res = pad_grasp(part, ax, pad, rtol=DEFAULT_RTOL if rtol is None else rtol,
                             max_seconds=left / (len(candidates) - n),
                             max_area=default_max_area(part), **opts)
+            if elasticity == "neo-hookean":
+                res = finite_strain_levels(res, elasticity, rtol)
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
             extra = {"converged": res.converged, "n_levels": len(res.levels)}
         else:
             fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, **opts)
+            if elasticity == "neo-hookean":
+                fine = optimize_finite_strain(mesh, fine, rtol=DEFAULT_RTOL if rtol is None
+                                              else rtol)
             err = {"quality": None, "U_A": None, "sigma_star": None}
             verdict, extra = fine.verdict, {"converged": False, "n_levels": 1}
         r.update({"sigma_star": fine.sigma_star, "quality": fine.quality, "verdict": verdict,
                   "verified": True, "method": "exact", "lattice_quality": r["quality"],
                   "error_estimate": err, "force": fine.force, **extra})
+        if elasticity != "linear":
+            r["elasticity"] = elasticity
         verified.append(fine)
     return verified

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DeformClosureError
+from ..errors import DeformClosureError, GraspError
 from .base import Report, provenance, write_report
 from .inputs import read_inputs, source_of
 
@@ -51,6 +51,10 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
     p = params
     _check_params(p)
+    if p.get("elasticity") == "neo-hookean":
+        raise GraspError("--elasticity neo-hookean: not supported by check yet (finite strain, "
+                         "SPEC §8, covers pads on a grasp axis: optimize and plan); use "
+                         "--elasticity linear")
     check_accuracy(p.get("rtol"), p.get("max_seconds"))
     check_refine(p.get("refine"))
     fsrc = source_of(p["fingers"], "finger file")

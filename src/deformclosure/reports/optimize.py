@@ -22,11 +22,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     if p["export_fields"] is not None:
         check_field_path(p["export_fields"])
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
-    if model == "paper":
-        return _paper(part, p)
     if p.get("elasticity") == "neo-hookean" and model == "paper":
         raise GraspError("--elasticity neo-hookean: only with the pads model (SPEC §8); drop "
                          "--model paper / --jaws")
+    if model == "paper":
+        return _paper(part, p)
     only_for("paper", [("--jaws", p["jaws"] is not None), ("--jaw-width", p["jaw_width"] != 0.0),
                        ("--eps", p["eps"] is not None),
                        ("--export-graph", p["export_graph"] is not None),
@@ -87,7 +87,7 @@ def _pads(part, p: dict, notify) -> Report:
 
         if notify is not None:
             notify("finite strain (neo-Hookean) ...")
-        res = finite_strain_levels(res, "neo-hookean", rtol)
+        res = finite_strain_levels(res, "neo-hookean", rtol, max_seconds=p["max_seconds"])
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     lines = _pads_lines(res, data, pad, inp.unit, scale)
     rep = Report("optimize", data, lines,

@@ -53,7 +53,9 @@ def _pads(part, p: dict, progress) -> Report:
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
                     top=p["verify"], twin=twin, progress=progress, part=inp.part,
-                    rtol=p["rtol"], max_seconds=p["max_seconds"])
+                    rtol=p["rtol"], max_seconds=p["max_seconds"],
+                    elasticity=p.get("elasticity") or getattr(inp.mesh.material, "model",
+                                                               "linear"))
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)
