@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MEMORY_BUDGET",
+    "MAX_COORDINATE",
     "MAX_TRIANGLES",
     "MAX_THIN_ELEMENTS",
     "MIN_GAP_FRACTION",
@@ -77,6 +78,10 @@ MEMORY_BUDGET = 4.0 * GB
 #: Resident memory of the interpreter with numpy, scipy, shapely, numba and the package
 #: imported (bytes), measured.
 BASE_BYTES = 0.2 * GB
+
+#: Largest coordinate magnitude accepted in a part file or a drawing (in its units);
+#: beyond it, areas overflow and the geometry checks are meaningless.
+MAX_COORDINATE = 1e12
 
 # --------------------------------------------------------------------------- meshing
 #: Largest mesh (triangles) a part may be meshed into. Protects the sparse factorisation

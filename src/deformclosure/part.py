@@ -34,7 +34,7 @@ from .drawing import (drawing_source, is_drawing_file, material_file_beside,
 from .errors import DeformClosureError, PartError
 from .geometry import point_set_diameter, signed_area, touch_tolerance
 from .jsonfile import InputFile, Source
-from .limits import MAX_TRIANGLES, check_mesh_points, check_ring_gaps, points_within
+from .limits import MAX_COORDINATE, MAX_TRIANGLES, check_mesh_points, check_ring_gaps, points_within
 from .units import length_scale
 
 __all__ = [
@@ -46,11 +46,6 @@ __all__ = [
     "part_from_drawing",
     "MAX_TRIANGLES",
 ]
-
-
-#: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
-#: it, areas overflow and the geometry checks are meaningless.
-MAX_COORDINATE = 1e12
 
 
 # --------------------------------------------------------------------------- schema
