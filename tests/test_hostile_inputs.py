@@ -72,10 +72,70 @@ CASES = {
                                     "--pad-radius", "1e308"], "--pad-radius"),
     "slice extent 1e300": (lambda t: ["slice", str(RECT), "--node", "5", "--fingers", str(FINGERS),
                                       "--extent=-1e300,1e300,-1e300,1e300"], "--extent"),
+    # issue 23 item 3: finger and pad sizes against the part's size (23.3 mm across)
+    "disc finger radius 1e-300": (lambda t: ["check", str(RECT), "--fingers", _fingers(t, 1e-300)],
+                                  "fingers[0].radius"),
+    "disc finger radius 1e-12 x the part": (lambda t: ["check", str(RECT), "--fingers",
+                                                       _fingers(t, 1e-12 * 23.3)], "0.002 to 100"),
+    "disc finger radius 1e6 x the part": (lambda t: ["check", str(RECT), "--fingers",
+                                                     _fingers(t, 1e6 * 23.3)], "fingers[0].radius"),
+    "pad radius 1e-300": (lambda t: ["optimize", str(RECT), "--at", "0,10", "12,10",
+                                     "--pad-radius", "1e-300"], "--pad-radius"),
+    "pad radius 1e-12 x the part (plan)": (lambda t: ["plan", str(RECT), "--pad-radius", "2.3e-11"],
+                                           "1e-06 to 100"),
+    "pad width 1e308 (plan)": (lambda t: ["plan", str(RECT), "--pad-width", "1e308"], "--pad-width"),
+    "pad width -inf": (lambda t: ["optimize", str(RECT), "--at", "0,10", "12,10", "--pad-width",
+                                  "-inf"], "--pad-width"),
+    # a mesh file above the triangle limit is refused before it is validated
+    "mesh file of 500k triangles": (lambda t: ["mesh", _big_mesh(t)], "400,000"),
+    "optimize a mesh file of 500k triangles": (lambda t: ["optimize", _big_mesh(t), "--at",
+                                                          "0,5", "10,5"], "400,000"),
+    # an unknown picture format is one line listing the formats
+    "plot x.unknownext": (lambda t: ["mesh", str(RECT), "--plot", str(t / "x.unknownext")], "png"),
+    # material values out of range (issue 23 item 4: --material at 1e-300 and 1e308)
+    **{f"material {k} = {v}": (lambda t, k=k, v=v: ["mesh", str(RECT), "--material",
+                                                    _material(**{k: v})], f"material.{k}")
+       for k, v in [("youngs_modulus", 1e-300), ("youngs_modulus", 1e308),
+                    ("thickness", 1e-300), ("thickness", 1e308),
+                    ("elastic_limit_strain", 1e-300), ("elastic_limit_strain", 1e308),
+                    ("critical_distance", 1e308), ("poisson_ratio", 1e308)]},
 }
 
 
-@pytest.mark.parametrize("name", list(CASES))
+def _fingers(tmp, radius_mm: float) -> str:
+    return _write(tmp, "f.json", json.dumps({"units": "mm", "fingers": [
+        {"type": "disc", "center": [-radius_mm, 10], "radius": radius_mm},
+        {"type": "disc", "center": [14, 10], "radius": 2},
+        {"type": "halfplane", "point": [6, 0], "normal": [0, 1]}]}))
+
+
+def _material(**values) -> str:
+    m = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1,
+         "elastic_limit_strain": 0.8, "units": "mm", **values}
+    return json.dumps(m)
+
+
+def _big_mesh(tmp) -> str:
+    """A mesh JSON of 2 × 500² = 500,000 triangles (above the 400,000 limit)."""
+    p = tmp / "big.json"
+    if not p.exists():
+        import numpy as np
+
+        n = 501
+        i = np.arange(n - 1)
+        I, J = np.meshgrid(i, i)
+        a = (J * n + I).ravel()
+        tris = np.vstack([np.column_stack([a, a + 1, a + n + 1]), np.column_stack([a, a + n + 1, a + n])])
+        x, y = np.meshgrid(np.linspace(0, 10, n), np.linspace(0, 10, n))
+        p.write_text(json.dumps({"format": "deformclosure-mesh/1", "units": "mm",
+                                 "nodes": np.column_stack([x.ravel(), y.ravel()]).tolist(),
+                                 "triangles": tris.tolist(), "material": json.loads(_material())}))
+    return str(p)
+
+
+# reading a 500k-triangle JSON file takes ~10 s before its size is refused
+@pytest.mark.parametrize("name", [pytest.param(k, marks=pytest.mark.slow) if "500k" in k else k
+                                  for k in CASES])
 def test_hostile_input_is_one_line_exit_2(name, tmp_path):
     make, pattern = CASES[name]
     args = make(tmp_path)
