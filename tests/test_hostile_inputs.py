@@ -276,6 +276,9 @@ DRAWINGS = {
     # name: (file name, bytes or a function of tmp_path giving them, kwargs, words)
     "svg empty": ("a.svg", b"", {}, "not a readable SVG"),
     "svg binary": ("a.svg", bytes(range(256)) * 8, {}, "not a readable SVG"),
+    "svg unknown encoding": ("a.svg", b'<?xml version="1.0" encoding="UTF-8X"?><svg '
+                             b'xmlns="http://www.w3.org/2000/svg"><rect width="2" height="1"/></svg>',
+                             {}, "unknown encoding"),        # found by the fuzz test
     "svg wrong namespace": ("a.svg", b'<svg xmlns="ttp://x"><rect width="2" height="1"/></svg>', {},
                             "namespace"),
     "svg no shapes": ("a.svg", _svg(""), {}, "no lines"),

@@ -84,7 +84,7 @@ MAX_ENTITIES = 50_000
 
 #: Most numbers of SVG path data (``d``, ``points``) in a drawing (measured: 200 000
 #: numbers read and flattened in 1.8 s).
-MAX_PATH_NUMBERS = 1_000_000
+MAX_PATH_NUMBERS = 500_000
 
 #: Most SVG sub-paths (``M`` commands) in a drawing: svgelements is quadratic in them
 #: (20 000 in one path: 0.4 s, 40 000: 1.3 s, a million would take minutes).
@@ -694,7 +694,7 @@ def _svg_prescan(src: Source) -> None:
         parser.Parse(src.data, True)
     except _Refused as err:
         raise PartError(str(err)) from None
-    except (expat.ExpatError, ValueError, OverflowError) as err:
+    except (expat.ExpatError, ValueError, OverflowError, LookupError) as err:  # LookupError: an unknown encoding
         raise PartError(f"{name}: not a readable SVG file ({_detail(err)})") from None
     _svg_expanded_count(name, children, use, ids)
 
