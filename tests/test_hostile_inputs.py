@@ -279,6 +279,10 @@ DRAWINGS = {
     "svg unknown encoding": ("a.svg", b'<?xml version="1.0" encoding="UTF-8X"?><svg '
                              b'xmlns="http://www.w3.org/2000/svg"><rect width="2" height="1"/></svg>',
                              {}, "unknown encoding"),        # found by the fuzz test
+    "svg nan viewBox": ("a.svg", _svg('<rect width="20" height="10"/>',
+                                      'width="20mm" height="10mm" viewBox="0 0 nan 10"'), {},
+                        "not a finite number"),
+    "svg nan in path": ("a.svg", _svg('<path d="M0 0 L nan 0 L 10 10 Z"/>'), {}, "not a finite"),
     "svg wrong namespace": ("a.svg", b'<svg xmlns="ttp://x"><rect width="2" height="1"/></svg>', {},
                             "namespace"),
     "svg no shapes": ("a.svg", _svg(""), {}, "no lines"),

@@ -605,6 +605,7 @@ def _svg_shapes(svg, path: str, units: str | None, layer: str | None,
 
 
 _SVG_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_SVG_NOT_FINITE = re.compile(r"(?i)nan|inf")
 _SVG_PATH_ATTRS = ("d", "points")
 _SVG_NUMERIC_ATTRS = ("x", "y", "x1", "y1", "x2", "y2", "cx", "cy", "r", "rx", "ry", "width",
                       "height", "transform", "viewBox")
@@ -667,6 +668,11 @@ def _svg_prescan(src: Source) -> None:
         for key, value in attrs.items():
             local = key.rpartition(":")[2]
             if local in _SVG_PATH_ATTRS or local in _SVG_NUMERIC_ATTRS:
+                if _SVG_NOT_FINITE.search(value):
+                    # svgelements skips such a value silently (a NaN viewBox scaled the
+                    # drawing by 96 ppi instead of its width)
+                    raise _Refused(f"{name}: attribute {key!r} of element #{i} <{tag}> is not "
+                                   "a finite number (NaN or inf); fix it")
                 nums = _SVG_NUMBER.findall(value)
                 if local in _SVG_PATH_ATTRS:
                     counts["numbers"] += len(nums)
