@@ -421,3 +421,34 @@ def test_a_drawing_never_reads_a_file_it_names(tmp_path):
         else:
             assert proc.returncode == 0, (name, proc.stderr)
             assert len(json.loads(proc.stdout)["outer"]) == 4, name
+
+
+def test_batch_over_a_folder_of_hostile_drawings(tmp_path, capsys):
+    """A folder's drawings are jobs with their material files (which are no jobs of their
+    own); a hostile drawing fails its job with the reader's one line, the rest run."""
+    import shutil
+
+    from deformclosure.batch import load_jobs
+
+    gasket = ROOT / "examples" / "drawings"
+    shutil.copy(gasket / "gasket.dxf", tmp_path / "gasket.dxf")
+    for stem in ("gasket", "laughs", "truncated"):
+        shutil.copy(gasket / "gasket.material.json", tmp_path / f"{stem}.material.json")
+    (tmp_path / "laughs.svg").write_bytes((_LAUGHS + '<svg xmlns="http://www.w3.org/2000/svg">'
+                                           '<rect id="&j;" width="20" height="10"/></svg>').encode())
+    (tmp_path / "truncated.dxf").write_bytes((gasket / "gasket.dxf").read_bytes()[:3000])
+    jobs = load_jobs(tmp_path, "mesh")
+    assert sorted(Path(j.part).name for j in jobs) == ["gasket.dxf", "laughs.svg", "truncated.dxf"]
+    db = str(tmp_path / "b.sqlite")
+    rc = main(["batch", str(tmp_path), "-o", db, "--command", "mesh", "--scheduler", "inline", "-q"])
+    assert rc == 1                                   # some jobs failed
+    capsys.readouterr()
+    assert main(["results", db]) == 0
+    cap = capsys.readouterr()
+    table = cap.out + cap.err
+    # rows in the folder's order (the part column is cut to its width)
+    gasket, laughs, truncated = table.splitlines()[1:4]
+    rows = {"gasket.dxf": gasket, "laughs.svg": laughs, "truncated.dxf": truncated}
+    assert " ok " in rows["gasket.dxf"]
+    assert "failed" in rows["laughs.svg"] and "entity" in rows["laughs.svg"]
+    assert "failed" in rows["truncated.dxf"] and "not a readable DXF" in rows["truncated.dxf"]
