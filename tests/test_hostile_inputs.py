@@ -452,3 +452,23 @@ def test_batch_over_a_folder_of_hostile_drawings(tmp_path, capsys):
     assert " ok " in rows["gasket.dxf"]
     assert "failed" in rows["laughs.svg"] and "entity" in rows["laughs.svg"]
     assert "failed" in rows["truncated.dxf"] and "not a readable DXF" in rows["truncated.dxf"]
+
+
+def test_ezdxf_structure_warnings_do_not_add_lines(tmp_path):
+    """A damaged DXF that ezdxf reads with a logged warning ("DXF Structure Warning") still
+    gives the CLI's output alone: nothing on stderr when it succeeds, one line when not."""
+    gasket = (ROOT / "examples" / "drawings" / "gasket.dxf").read_bytes()
+    mat = ('{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1, '
+           '"elastic_limit_strain": 0.8, "units": "mm"}')
+    for data, rc in ((b"  0\nLINE\n" + gasket, 0),
+                     (b"  0\nLINE\n" + gasket.replace(b"LWPOLYLINE", b"LWPOLYLINX", 1), None)):
+        p = _write(tmp_path, "w.dxf", data)
+        proc = subprocess.run([sys.executable, "-m", "deformclosure", "import", p, "--material",
+                               mat, "-o", str(tmp_path / "p.json"), "-q"],
+                              capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+        lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+        assert "DXF Structure" not in proc.stderr, proc.stderr
+        if rc == 0:
+            assert proc.returncode == 0 and not lines, proc.stderr
+        else:
+            assert proc.returncode == 2 and len(lines) == 1, proc.stderr

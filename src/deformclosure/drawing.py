@@ -40,6 +40,7 @@ import io
 import math
 import os
 import re
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
@@ -177,7 +178,8 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
     src = drawing_source(path)
     _check_options(units, default_units, tolerance)
     if src.suffix == ".dxf":
-        pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
+        with _quiet_logger("ezdxf"):
+            pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
     elif src.suffix == ".svg":
         pieces, unit, scale = _svg_pieces(src, units, layer, tolerance)
     else:
@@ -188,6 +190,24 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
                         f"{where}; draw the part's outline")
     loops = [(pts * scale, label) for pts, label in _chain(pieces, src.name)]
     return _assemble(loops, unit, src.name)
+
+
+@contextmanager
+def _quiet_logger(name: str):
+    """Silence library logger ``name`` while reading, unless the caller configured logging:
+    ezdxf logs damaged structure ("DXF Structure Warning: …") through Python's last-resort
+    handler, which put a second line beside the CLI's one-line error."""
+    import logging
+
+    log = logging.getLogger(name)
+    quiet = not log.hasHandlers() and not log.disabled
+    if quiet:
+        log.disabled = True
+    try:
+        yield
+    finally:
+        if quiet:
+            log.disabled = False
 
 
 def drawing_source(path: InputFile) -> Source:
