@@ -379,6 +379,10 @@ def test_zero_and_huge_stroke_widths_do_not_change_the_outline():
         d = read_drawing(Source("a.svg", _svg(f'<rect width="20" height="10" stroke="black" '
                                               f'stroke-width="{w}"/>')))
         assert abs(shapely_area(d.outer) - 200.0) < 1e-9
+    for w in (0.0, 1e308):                         # DXF polyline widths likewise
+        d = read_drawing(Source("a.dxf", _dxf(lambda m: m.add_lwpolyline(
+            [(0, 0), (20, 0), (20, 10), (0, 10)], close=True, dxfattribs={"const_width": w}))))
+        assert abs(shapely_area(d.outer) - 200.0) < 1e-9
 
 
 def shapely_area(ring) -> float:
