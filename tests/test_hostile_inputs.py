@@ -414,17 +414,32 @@ def test_a_drawing_never_reads_a_file_it_names(tmp_path):
                                     _rect(m), m.add_blockref("X", (0, 0)))),
     }
     for name, data in cases.items():
-        p = _write(tmp_path, name, data)
-        proc = subprocess.run([sys.executable, "-m", "deformclosure", "import", p, "--material",
-                               '{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1, '
-                               '"elastic_limit_strain": 0.8, "units": "mm"}', "-o", "-"],
-                              capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
-        assert "Traceback" not in proc.stderr, (name, proc.stderr)
+        _write(tmp_path, name, data)
+    # one interpreter imports every drawing (a blocked open would stop it: the timeout)
+    script = (
+        "import contextlib, io, json, sys\n"
+        "from deformclosure.cli.main import main\n"
+        "out = {}\n"
+        "for name in sys.argv[2:]:\n"
+        "    err = io.StringIO()\n"
+        "    with contextlib.redirect_stderr(err):\n"
+        "        rc = main(['import', name, '--material', sys.argv[1], '-o', name + '.json', '-q'])\n"
+        "    out[name] = [rc, err.getvalue()]\n"
+        "print(json.dumps(out))\n")
+    mat = ('{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1, '
+           '"elastic_limit_strain": 0.8, "units": "mm"}')
+    proc = subprocess.run([sys.executable, "-c", script, mat, *(str(tmp_path / n) for n in cases)],
+                          capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr
+    results = {Path(k).name: v for k, v in json.loads(proc.stdout).items()}
+    assert sorted(results) == sorted(cases)
+    for name, (rc, err) in results.items():
+        assert "Traceback" not in err, (name, err)
         if name in ("entity.svg", "param.svg"):
-            assert proc.returncode == 2 and "entity" in proc.stderr, (name, proc.stderr)
+            assert rc == 2 and "entity" in err, (name, err)
         else:
-            assert proc.returncode == 0, (name, proc.stderr)
-            assert len(json.loads(proc.stdout)["outer"]) == 4, name
+            assert rc == 0, (name, err)
+            assert len(json.loads((tmp_path / f"{name}.json").read_text())["outer"]) == 4, name
 
 
 def test_batch_over_a_folder_of_hostile_drawings(tmp_path, capsys):
