@@ -328,30 +328,30 @@ class FiniteStrainPads:
         ell = critical_distance_of(self.mesh) if ell is None else ell
         sigma0 = curve.sigma0
         step = STEP_FRACTION * sigma0
-        lo = curve.delta0
+        tol = rtol * sigma0
+        top = sigma0 * (1 - 1e-9)                  # σ = 0: the pads meet
+        lo, hi = curve.delta0, None
+        # bracket: the first step whose strain reaches e_L, or that cannot be reached
         d = lo
-        while True:
-            d_next = d + step
-            if d_next >= sigma0:
-                d_next = sigma0 * (1 - 1e-9)
-            e = curve.strain(curve.sigma_at(d_next), ell)
-            if not math.isfinite(e):
+        while d < top:
+            d = min(d + step, top)
+            e = curve.strain(curve.sigma_at(d), ell)
+            if not math.isfinite(e) or e >= e_L:
+                hi = d
                 break
-            if e >= e_L:
-                hi = d_next
-                lo = d
-                while hi - lo > rtol * sigma0:
-                    mid = 0.5 * (lo + hi)
-                    em = curve.strain(curve.sigma_at(mid), ell)
-                    if em >= e_L:
-                        hi = mid
-                    else:
-                        lo = mid
-                return FiniteStrainLimit(curve.sigma_at(hi), True, ell)
-            d = d_next
-            if d >= sigma0 * (1 - 1e-6):
-                break
-        # e_L not reached before the squeeze became unreachable (or σ = 0)
-        top = curve.delta_failed
-        d_last = max([x for x in curve._deltas if top is None or x < top], default=curve.delta0)
-        return FiniteStrainLimit(curve.sigma_at(d_last), False, ell)
+            lo = d
+        if hi is None:                             # e_L not reached up to σ = 0
+            return FiniteStrainLimit(curve.sigma_at(lo), False, ell)
+        # bisect: a reachable point below e_L raises lo; one at or above e_L, or one the
+        # solver cannot reach, lowers hi (an unreachable squeeze must not hide a crossing)
+        crossed = math.isfinite(curve.strain(curve.sigma_at(hi), ell))
+        while hi - lo > tol:
+            mid = 0.5 * (lo + hi)
+            em = curve.strain(curve.sigma_at(mid), ell)
+            if math.isfinite(em) and em < e_L:
+                lo = mid
+            else:
+                hi, crossed = mid, math.isfinite(em)
+        if crossed:
+            return FiniteStrainLimit(curve.sigma_at(hi), True, ell)
+        return FiniteStrainLimit(curve.sigma_at(lo), False, ell)
