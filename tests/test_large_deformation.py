@@ -237,3 +237,26 @@ def test_optimize_neo_hookean_report_on_one_mesh():
     assert d["sigma_L"] < d["sigma_star"] < d["sigma0"]
     assert d["force"] > 0
     assert any("upper bound" in w for w in d["warnings"])
+
+
+def test_elastic_limit_does_not_depend_on_the_bracketing_step(monkeypatch):
+    """σ_L is where the finite-strain measure reaches e_L, located by bisection: the same
+    for two bracketing steps, and the strain there is e_L."""
+    import dataclasses
+
+    import deformclosure.pads.large_deformation as PL
+
+    base = mesh_part(notched_part(), max_area=1e-6)
+    mat = dataclasses.replace(base.material, elastic_limit_strain=0.3)
+    mesh = Mesh.from_arrays(base.nodes, base.triangles, mat)
+    axis, pad = GraspAxis(1.5707963, -0.015), Pad(0.0, 2e-3)
+    out = []
+    for frac in (1 / 16, 1 / 5):
+        monkeypatch.setattr(PL, "STEP_FRACTION", frac)
+        fs = FiniteStrainPads(mesh)
+        c = fs.curve(axis, pad)
+        lim = fs.elastic_limit(c, 0.3, rtol=1e-6)
+        assert lim.reached
+        out.append(lim.sigma_L)
+        assert c.strain(lim.sigma_L) == pytest.approx(0.3, abs=2e-3)
+    assert out[0] == pytest.approx(out[1], abs=2e-6 * c.sigma0)
