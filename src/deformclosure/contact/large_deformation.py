@@ -206,6 +206,7 @@ class FiniteStrainContact:
         self.gap_tol = RESIDUAL_TOL * self.length
         self.area = float(np.ptp(self.X[:, 0]) * np.ptp(self.X[:, 1])) if len(self.X) else 0.0
         self._floor: float | None = None
+        self._pattern: _KKTPattern | None = None
         dofs = np.column_stack([2 * self.node, 2 * self.node + 1]).ravel()
         self._dofs = dofs
         if triangles is not None and len(self.X) > 2:
@@ -344,36 +345,33 @@ class FiniteStrainContact:
 
     def _newton_step(self, u, lam, mu, grad, Kt, g, n, H, active):
         """One primal–dual active-set Newton step; returns ``(Δu, λ⁺, μ⁺)``, or ``None``
-        when the Newton system is singular even regularised."""
-        nd = self.n_dofs
-        A = np.flatnonzero(active)
-        # Tangent minus the surface curvature under the active rows' forces.
-        blk = -(lam[A, None, None] * H[A])                       # (a, 2, 2)
-        d = self.node[A]
-        ri = np.stack([2 * d, 2 * d, 2 * d + 1, 2 * d + 1], 1).ravel()
-        ci = np.stack([2 * d, 2 * d + 1, 2 * d, 2 * d + 1], 1).ravel()
-        Hc = sp.csr_matrix((blk.reshape(-1), (ri, ci)), shape=(nd, nd))
-        Kc = (Kt + Hc).tocsr()
-        a = len(A)
-        J = sp.csr_matrix((n[A].ravel(), (np.repeat(np.arange(a), 2),
-                                          np.stack([2 * d, 2 * d + 1], 1).ravel())),
-                          shape=(a, nd))
-        G = self.G
-        k = G.shape[0]
-        lamA = np.zeros_like(lam)
-        lamA[A] = lam[A]
-        r_u = grad - self._contact_load(lamA, n) - G.T @ mu
-        o = self._order                      # nested dissection; multipliers last
-        Ko, Jo, Go = Kc[o][:, o], J[:, o], G[:, o]
-        KKT = sp.bmat([[Ko, -Jo.T, -Go.T], [-Jo, None, None], [-Go, None, None]], format="csc")
-        rhs = np.concatenate([-r_u[o], g[A], G @ u])
+        when the Newton system is singular even regularised.
+
+        The system is ``[[K_T − Σ_A λ_j ∇²g_j, −Jᵀ, −Gᵀ], [−J, D, 0], [−G, 0, 0]]`` over every
+        candidate row: an active row ``j`` has its gradient in ``J`` and ``D_jj = 0`` (its
+        gap linearised to zero), an inactive one a zero row of ``J`` and ``D_jj = 1`` (its
+        force set to zero). So the pattern is the same at every step: it is built once
+        (:class:`_KKTPattern`) and each step only fills its values.
+        """
+        nd, r = self.n_dofs, len(self.node)
+        pat = self._pattern
+        if pat is None or not pat.fits(Kt):
+            pat = self._pattern = _KKTPattern(Kt, self.node, self.G, self._order)
+        A = active
+        lamA = np.where(A, lam, 0.0)
+        r_u = grad - self._contact_load(lamA, n) - self.G.T @ mu
+        # the pad's surface curvature under the active forces, on the nodes' diagonal blocks
+        curv = -(lamA[:, None, None] * H)
+        KKT = pat.matrix(Kt.data, curv, n, A)
+        o = self._order
+        rhs = np.concatenate([-r_u[o], np.where(A, g, -lam), self.G @ u])
         try:
             sol = spla.splu(KKT, permc_spec="NATURAL").solve(rhs)
         except RuntimeError:
             # A singular system (a body with no active row leaves the float along the
             # axis free): a proximal step regularised by a tiny multiple of the diagonal.
             eps = 1e-10 * float(abs(Kt.diagonal()).mean())
-            reg = sp.diags(np.concatenate([np.full(nd, eps), np.full(a + k, -eps)]))
+            reg = sp.diags(np.concatenate([np.full(nd, eps), np.full(KKT.shape[0] - nd, -eps)]))
             try:
                 sol = spla.splu((KKT + reg).tocsc(), permc_spec="COLAMD").solve(rhs)
             except RuntimeError:
@@ -382,10 +380,93 @@ class FiniteStrainContact:
             return None
         du = np.empty(nd)
         du[o] = sol[:nd]
-        lam_new = np.zeros_like(lam)
-        lam_new[A] = lam[A] + sol[nd:nd + a]
-        mu_new = mu + sol[nd + a:]
+        lam_new = np.where(A, lam + sol[nd:nd + r], 0.0)
+        mu_new = mu + sol[nd + r:]
         return du, lam_new, mu_new
+
+
+class _KKTPattern:
+    """The fixed sparsity pattern of the Newton system of :class:`FiniteStrainContact`, in
+    the solver's nested-dissection order (CSC), and where each value goes: the tangent's
+    CSR values, the rows' gradients (twice, the matrix is symmetric), the gauge and the
+    multipliers' diagonal. Built once per tangent pattern; :meth:`matrix` fills it."""
+
+    def __init__(self, Kt: sp.csr_matrix, node: np.ndarray, G: sp.csr_matrix,
+                 order: np.ndarray) -> None:
+        Kt = Kt.tocsr()
+        nd, r = Kt.shape[0], len(node)
+        self.indptr_K, self.indices_K = Kt.indptr.copy(), Kt.indices.copy()
+        nK = Kt.nnz
+        # ids (1-based, so no value is dropped as a zero) of every source value
+        K_ids = sp.csr_matrix((np.arange(1, nK + 1, dtype=float), Kt.indices, Kt.indptr),
+                              shape=(nd, nd))
+        jr = np.repeat(np.arange(r), 2)
+        jc = np.stack([2 * node, 2 * node + 1], 1).ravel()
+        base_jl = nK + 1
+        Jl = sp.csr_matrix((np.arange(base_jl, base_jl + 2 * r, dtype=float), (jr, jc)),
+                           shape=(r, nd))
+        base_ju = base_jl + 2 * r
+        Ju = sp.csr_matrix((np.arange(base_ju, base_ju + 2 * r, dtype=float), (jr, jc)),
+                           shape=(r, nd))
+        Gd = np.asarray(G.todense())
+        base_g = base_ju + 2 * r
+        gl = (np.arange(Gd.size, dtype=float) + base_g).reshape(Gd.shape)
+        base_gu = base_g + Gd.size
+        gu = (np.arange(Gd.size, dtype=float) + base_gu).reshape(Gd.shape)
+        base_d = base_gu + Gd.size
+        D = sp.diags(np.arange(base_d, base_d + r, dtype=float))
+        o = order
+        T = sp.bmat([[K_ids[o][:, o], Ju[:, o].T, sp.csr_matrix(gu[:, o].T)],
+                     [Jl[:, o], D, None],
+                     [sp.csr_matrix(gl[:, o]), None, None]], format="csc")
+        T.sort_indices()
+        ids = T.data.astype(np.int64)
+        self.indptr, self.indices, self.shape = T.indptr, T.indices, T.shape
+        self.nnz = len(ids)
+        self.pos_K = np.flatnonzero(ids < base_jl)
+        self.src_K = ids[self.pos_K] - 1
+        self.pos_Jl = np.flatnonzero((ids >= base_jl) & (ids < base_ju))
+        self.src_Jl = ids[self.pos_Jl] - base_jl                 # index into (r, 2) ravel
+        self.pos_Ju = np.flatnonzero((ids >= base_ju) & (ids < base_g))
+        self.src_Ju = ids[self.pos_Ju] - base_ju
+        pos_g = np.flatnonzero((ids >= base_g) & (ids < base_d))
+        src = ids[pos_g]
+        val = np.where(src < base_gu, Gd.ravel()[np.clip(src - base_g, 0, Gd.size - 1)],
+                       Gd.ravel()[np.clip(src - base_gu, 0, Gd.size - 1)])
+        self.pos_G, self.val_G = pos_g, -val
+        self.pos_D = np.flatnonzero(ids >= base_d)
+        self.src_D = ids[self.pos_D] - base_d
+        # where each row's node's 2×2 diagonal block sits in the tangent's CSR values
+        blocks = np.empty((r, 4), np.int64)
+        for q, (di, dj) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
+            row, col = 2 * node + di, 2 * node + dj
+            for j in range(r):
+                lo, hi = Kt.indptr[row[j]], Kt.indptr[row[j] + 1]
+                hit = np.flatnonzero(Kt.indices[lo:hi] == col[j])
+                if len(hit) != 1:
+                    raise ValueError("tangent without the nodes' diagonal blocks")
+                blocks[j, q] = lo + hit[0]
+        self.blocks = blocks
+
+    def fits(self, Kt: sp.csr_matrix) -> bool:
+        """Whether ``Kt`` has the pattern this was built for."""
+        return (Kt.nnz == len(self.indices_K) and np.array_equal(Kt.indptr, self.indptr_K)
+                and np.array_equal(Kt.indices, self.indices_K))
+
+    def matrix(self, K_data: np.ndarray, curv: np.ndarray, n: np.ndarray,
+               active: np.ndarray) -> sp.csc_matrix:
+        """The Newton matrix: tangent values ``K_data`` plus the rows' curvature blocks
+        ``curv`` (r, 2, 2), gradients ``n`` (r, 2) of the active rows."""
+        Kd = np.array(K_data, float)
+        np.add.at(Kd, self.blocks.ravel(), curv.reshape(-1))
+        data = np.empty(self.nnz)
+        data[self.pos_K] = Kd[self.src_K]
+        nv = np.where(active[:, None], -n, 0.0).ravel()
+        data[self.pos_Jl] = nv[self.src_Jl]
+        data[self.pos_Ju] = nv[self.src_Ju]
+        data[self.pos_G] = self.val_G
+        data[self.pos_D] = np.where(active[self.src_D], 0.0, 1.0)
+        return sp.csc_matrix((data, self.indices, self.indptr), shape=self.shape)
 
 
 @dataclass
@@ -417,7 +498,9 @@ def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], li
     """Follow the contact equilibrium through the squeezes ``targets`` (m, increasing).
 
     Each target is reached from the previous converged state in one step, halved (and
-    the halves chained) when Newton does not converge; after :data:`MAX_HALVINGS`
+    the halves chained) when Newton does not converge or converges to a state of lower
+    energy than the last (the bodies only push, so the energy cannot fall as the squeeze
+    grows: such a state is another equilibrium branch); after :data:`MAX_HALVINGS`
     halvings the rest is reported as not reached.
 
     Parameters
@@ -466,6 +549,10 @@ def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], li
             if not trial.converged and u0 is not state.u:
                 trial = problem.solve(bodies_at(d_try), state.u, state.lam, state.mu)
                 solves += 1
+            if trial.converged and trial.energy < state.energy * (1 - 1e-9):
+                # the squeeze only adds energy (the bodies push: dU/dδ ≥ 0); a converged
+                # state below the last one is another equilibrium branch: a smaller step
+                trial.converged = False
             if trial.converged:
                 prev = (d_now, state)
                 state, d_now = trial, d_try

@@ -191,8 +191,9 @@ class FiniteStrainCurve:
 
     def _direct(self, k: int, delta: float, step: float) -> ContactState | None:
         """One Newton solve at ``delta`` from the states beside it (interpolated between the
-        two neighbours, or extrapolated from the two below), when the nearest is within a
-        step; ``None`` (the caller traces instead) when there is none or it fails."""
+        two neighbours, or extrapolated from the two below by at most one of their
+        spacings), when the nearest is within a step; ``None`` (the caller traces instead)
+        when there is none, it fails, or its energy is not between its neighbours'."""
         D, S = self._deltas, self._states
         if k == 0 or delta - D[k - 1] > step:
             return None
@@ -200,18 +201,31 @@ class FiniteStrainCurve:
         if k < len(D):
             w = (delta - D[k - 1]) / (D[k] - D[k - 1])
             u0, l0 = lo.u + w * (S[k].u - lo.u), lo.lam + w * (S[k].lam - lo.lam)
-        elif k >= 2:
-            w = (delta - D[k - 1]) / (D[k - 1] - D[k - 2])
+        elif k >= 2 and D[k - 1] - D[k - 2] > 0:
+            w = min((delta - D[k - 1]) / (D[k - 1] - D[k - 2]), 1.0)
             u0, l0 = lo.u + w * (lo.u - S[k - 2].u), lo.lam + w * (lo.lam - S[k - 2].lam)
         else:
             u0, l0 = lo.u, lo.lam
         trial = self.problem.solve(self.bodies_at(delta), u0, np.maximum(l0, 0.0), lo.mu)
         self.n_solves += 1
-        if not trial.converged:
+        if not trial.converged or not self._monotone(k, trial.energy):
             return None
         self._deltas.insert(k, float(delta))
         self._states.insert(k, trial)
         return trial
+
+    def _monotone(self, k: int, energy: float) -> bool:
+        """Whether an energy at a squeeze between states ``k − 1`` and ``k`` keeps ``U(δ)``
+        non-decreasing (the pads only push: ``dU/dδ = F ≥ 0``), with a round-off margin. A
+        converged state that breaks it is another equilibrium branch (e.g. the part
+        wrapped round a pad from a wild start), not the squeeze's."""
+        S = self._states
+        tol = 1e-9 * max(abs(energy), 1e-300)
+        if k > 0 and energy < S[k - 1].energy - tol:
+            return False
+        if k < len(S) and energy > S[k].energy + tol:
+            return False
+        return True
 
     def reachable(self, sigma: float) -> bool:
         """Whether the squeeze at ``sigma`` (m) can be solved."""
