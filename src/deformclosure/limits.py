@@ -25,14 +25,19 @@ is estimated beside the model and passed here as numbers:
 
 The CLI builds its ``--help`` texts from the maxima (:func:`limits_help`), so importing
 this module loads no numpy or shapely: the functions that need them import them.
+
+CPU threads are a resource too: :func:`blas_threads` caps the BLAS threads of the dense
+steps (:data:`BLAS_THREADS`), the one place the package sets them (threadpoolctl,
+imported on first use).
 """
 
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 from numbers import Integral
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Iterator, Sequence
 
 from .choices import MODELS, choose
 from .errors import DeformClosureError, GraspError, PartError
@@ -66,6 +71,8 @@ __all__ = [
     "check_slice_size",
     "format_count",
     "limits_help",
+    "BLAS_THREADS",
+    "blas_threads",
 ]
 
 GB = 1e9
@@ -197,6 +204,64 @@ MAX_SLICE_RESOLUTION = 2_000
 
 #: Peak bytes per image value while a slice is written as JSON (Python lists, text).
 SLICE_JSON_BYTES_PER_VALUE = 60.0
+
+
+# --------------------------------------------------------------------------- threads
+#: BLAS threads of the package's dense steps: the loops over many small problems (one
+#: contact path per grasp axis, the planner's screening, a landscape's placements), the
+#: condensation's boundary inverse and the gauged compliance. Their matrices have a few
+#: hundred to a few thousand rows; more threads gain nothing there and lose badly to the
+#: machine's other processes (OpenBLAS threads spin while they wait). Measured on a 2-core
+#: machine under load: LAPACK ``dpotri`` of a 2000 × 2000 factor 0.18 s on one thread and
+#: 6-7 s on the default two; the pads ``optimize`` of a 5 600-node notched bar 8.5 s with
+#: the default threads and 3.4 s with one (``benchmarks/bench_threads.py``). ``None``
+#: leaves the threads as they are (e.g. a large idle machine running one job). More cores
+#: pay off across jobs instead: batch workers or a Dask cluster (README "Using more
+#: cores").
+BLAS_THREADS: int | None = 1
+
+_CONTROLLER = None
+_DEPTH = 0          # blas_threads blocks entered and not left
+
+
+def _controller():
+    """The process's threadpoolctl controller, made once (it scans the loaded libraries,
+    so numpy's and scipy's BLAS are loaded before it)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        import numpy  # noqa: F401  (their BLAS libraries, before the scan)
+        import scipy.linalg  # noqa: F401
+        from threadpoolctl import ThreadpoolController
+
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER
+
+
+@contextmanager
+def blas_threads() -> Iterator[None]:
+    """Run the block with at most :data:`BLAS_THREADS` BLAS threads (restored after).
+
+    Put it around a loop over many small solves, or inside one dense step. The limit is
+    the process's (BLAS has no other): entering sets it (about 30 µs), a block nested in
+    another costs nothing, and leaving the outermost restores the threads.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> with blas_threads():
+    ...     float(np.ones((3, 3)) @ np.ones(3) @ np.ones(3))
+    9.0
+    """
+    global _DEPTH
+    if BLAS_THREADS is None or _DEPTH:
+        yield
+        return
+    with _controller().limit(limits=int(BLAS_THREADS), user_api="blas"):
+        _DEPTH += 1
+        try:
+            yield
+        finally:
+            _DEPTH -= 1
 
 
 def format_count(n: float) -> str:
