@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from deformclosure import limits
+from deformclosure.pads.size_limits import search_axes
 
 MAT = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
        "elastic_limit_strain": 0.8, "plane": "stress"}
@@ -55,7 +56,7 @@ def circle(k: int, r: float = 10.0) -> list:
     return np.column_stack([r * np.cos(t), r * np.sin(t)]).round(12).tolist()
 
 
-def largest_pads_block(solvers: int, ell_mm: float, n_axes: int = 48 * 50) -> int:
+def largest_pads_block(solvers: int, ell_mm: float, n_axes: int = search_axes(48, 50)) -> int:
     """Most triangles of a 12 x 20 mm block (critical distance ``ell_mm``) the pads
     estimate of ``optimize`` (default grid) accepts."""
     lo, hi = 1000, limits.MAX_TRIANGLES
@@ -123,9 +124,10 @@ def cases(folder: Path) -> list[tuple[str, str, list[str]]]:
     out.append(("check", f"{p_check:,} boundary nodes (circle), 3 solvers",
                 ["check", f, "--fingers", str(fingers)]))
 
-    # averaging: nnz ≈ m + m² π ℓ² / A; a critical distance of 2 mm puts 97 % of the
-    # maximum on a mesh small enough for the rest (solver, twin) to fit
-    ell = 2.0
+    # averaging: nnz ≈ m + m² π ℓ² / A; a critical distance of 4 mm puts 97 % of the
+    # maximum (4e8 pairs since the averages are pruned, issue 25) on ~43 000 triangles, a
+    # mesh small enough for the rest (solver, twin) to fit and to run in minutes
+    ell = 4.0
     m = math.sqrt(0.97 * limits.MAX_AVERAGING_NONZEROS * 240.0 / (math.pi * ell ** 2))
     f = write(folder, "block_avg.json", {"outer": block, "mesh": {"max_area": 240.0 * 1.59 / m}})
     data = json.loads(Path(f).read_text())

@@ -71,6 +71,8 @@ __all__ = [
     "check_slice_size",
     "format_count",
     "limits_help",
+    "holding",
+    "kept_bytes",
     "BLAS_THREADS",
     "blas_threads",
 ]
@@ -82,8 +84,9 @@ GB = 1e9
 MEMORY_BUDGET = 4.0 * GB
 
 #: Resident memory of the interpreter with numpy, scipy, shapely, numba and the package
-#: imported (bytes), measured.
-BASE_BYTES = 0.2 * GB
+#: imported (bytes), measured: 0.15-0.17 GB at a command's first factorisation
+#: (``benchmarks/bench_memory.py``).
+BASE_BYTES = 0.16 * GB
 
 # --------------------------------------------------------------------------- meshing
 #: Largest mesh (triangles) a part may be meshed into. Protects the sparse factorisation
@@ -130,9 +133,12 @@ _VERTEX_BASE = 2.8
 _VERTEX_PER_HALVING = 0.36
 
 # --------------------------------------------------------------------------- analyses
-#: Sparse LU of ``K`` (METIS nested dissection, SuperLU): bytes per ``n log2 n`` (n = mesh
-#: nodes), measured 1.05 GB at 79 000 nodes and 5.2 GB at 398 000 (unit-aspect parts).
-FACTOR_BYTES_PER_NLOGN = 700.0
+#: Sparse LU of ``K`` (METIS nested dissection, SuperLU without pivoting) and the
+#: factorised solver's other per-node arrays: bytes per ``n log2 n`` (n = mesh nodes).
+#: Measured (``benchmarks/bench_memory.py``, issue 25) as a solver's resident memory less
+#: its mesh and boundary terms: 300 at 5 000 nodes, 310 at 20 000, 340 at 40 000 (12 × 20
+#: mm block); counted 360.
+FACTOR_BYTES_PER_NLOGN = 360.0
 
 #: Bytes per mesh triangle held by a mesh, its stiffness matrix and their temporaries.
 MESH_BYTES_PER_TRIANGLE = 1_000.0
@@ -160,15 +166,30 @@ PAPER_GRAPH_BYTES_PER_P2 = 2_100.0
 #: plan 2.9 GB (345 s), optimize 1.9 GB, check 1.9 GB.
 MAX_BOUNDARY_NODES_PADS = 2_000
 
-#: Bytes per ``p²`` kept by one pads solver (condensed and axis-constrained compliances),
-#: measured 215 (one and two solvers on a 1000-node circle), and the transient of building
-#: one, 55.
-PADS_SOLVER_BYTES_PER_P2 = 215.0
-PADS_WORK_BYTES_PER_P2 = 55.0
+#: Bytes per ``p²`` kept by one pads solver (condensed and gauged compliances), and the
+#: transient of building one: measured 167 and 95 (a solver of a 2000-vertex circle,
+#: 5 900 nodes: 0.67 GB kept, 1.05 GB at its peak; 165 and 100 at 1000 vertices; issue 25,
+#: earlier 215 and 55 with the previous condensation).
+PADS_SOLVER_BYTES_PER_P2 = 170.0
+PADS_WORK_BYTES_PER_P2 = 100.0
 
-#: Bytes per grasp axis and boundary node of the release landscape's contact curves,
-#: measured 180-210 (plans of 500- and 1000-node circles, 1440 axes).
-PADS_AXIS_BYTES_PER_NODE = 210.0
+#: Bytes per grasp axis and boundary node of the release landscape's contact curves and
+#: their caches, measured 310-350 (plans of the notched bar at 3 600 and 10 600 nodes,
+#: 1440 axes; earlier 180-210 on 500- and 1000-node circles); counted 360.
+PADS_AXIS_BYTES_PER_NODE = 360.0
+
+#: Bytes per triangle of a pads analysis' transient on one mesh: the displacement and
+#: strain fields of the elastic limit at the path's breakpoints, their critical-distance
+#: averages and the noise floor's twin curves, measured 2.5-4.5 kB beyond the
+#: :data:`AVERAGING_CHUNK_BYTES` (optimize on the notched bar at 2 500, 10 000 and 20 000
+#: nodes, beyond the curves of the axes solved); counted 3 500.
+PADS_LEVEL_BYTES_PER_TRIANGLE = 3_500.0
+
+#: Share of the grid's axes whose curves the release search of one pads ``optimize``
+#: level solves and keeps: measured 12-25 % (295-589 of 2400 axes, the notched bar held
+#: in its notches, every level of ``bench_memory.py``); counted a quarter. A plan solves
+#: every axis of its grid.
+PADS_SEARCH_AXES_FRACTION = 0.25
 
 #: Largest number of element pairs of the critical-distance averages (pads model, SPEC §6):
 #: every element times the elements whose centroids lie within the critical distance ℓ
@@ -603,6 +624,36 @@ def check_ring_gaps(outer: np.ndarray, holes: Sequence[np.ndarray], diameter: fl
 
 
 # --------------------------------------------------------------------------- analyses
+_HELD = [0.0]       # bytes held by the enclosing analyses (:func:`holding`)
+
+
+@contextmanager
+def holding(nbytes: float) -> Iterator[None]:
+    """Count ``nbytes`` (an estimate of what the caller keeps) in every memory estimate
+    made inside the block: the estimates of later steps of one analysis see what the
+    earlier ones still hold — the solvers of a refinement's coarser levels, a plan's
+    solvers and curves while it verifies its best axes.
+
+    Examples
+    --------
+    >>> with holding(1e9):
+    ...     estimate_model_bytes("pads", n_nodes=1000, n_triangles=2000, n_boundary=100)["held"]
+    1000000000.0
+    """
+    _HELD[0] += float(nbytes)
+    try:
+        yield
+    finally:
+        _HELD[0] -= float(nbytes)
+
+
+def kept_bytes(estimate: dict[str, float]) -> float:
+    """What an analysis keeps after it ran, of its :func:`estimate_model_bytes`: its
+    meshes, factorisations, boundary matrices and landscape curves (not the base, the
+    transients or what its callers hold)."""
+    return sum(estimate[k] for k in ("mesh", "factorisation", "boundary", "landscape"))
+
+
 def _factor_bytes(n_nodes: int) -> float:
     n = max(int(n_nodes), 2)
     return FACTOR_BYTES_PER_NLOGN * n * math.log2(n)
@@ -645,16 +696,20 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
     Returns
     -------
     dict
-        ``{"base", "mesh", "factorisation", "boundary", "landscape", "graph", "averaging",
-        "strains", "total"}`` (bytes). The total holds the base, mesh, factorisation and boundary
+        ``{"base", "held", "mesh", "factorisation", "boundary", "landscape", "graph",
+        "averaging", "level", "strains", "total"}`` (bytes). The total holds the base,
+        what enclosing steps hold (:func:`holding`), mesh, factorisation and boundary
         matrices, plus the largest of the transients (graph construction, strain
-        responses, averaging operator), which come one after another.
+        responses, the averages, a pads level's elastic-limit fields), which come one
+        after another. The costs per unit are measured with
+        ``benchmarks/bench_memory.py`` (every command) and ``benchmarks/bench_limits.py``
+        (at the maxima).
     """
     p = int(n_boundary)
     q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
-    out = {"base": BASE_BYTES, "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
+    out = {"base": BASE_BYTES, "held": _HELD[0], "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
            "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
-           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "strains": 0.0}
+           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0}
     if model == "paper":
         out["graph"] = PAPER_GRAPH_BYTES_PER_P2 * q * q
         if plan:
@@ -667,13 +722,15 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
+        # the elastic limit's fields, their averages and the noise floor on the finest mesh
+        out["level"] = AVERAGING_CHUNK_BYTES + PADS_LEVEL_BYTES_PER_TRIANGLE * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
     # one after another: the largest of these transients adds to what stays.
-    transient = max(out["graph"], out["strains"], out["averaging"])
-    out["total"] = (out["base"] + out["mesh"] + out["factorisation"] + out["boundary"]
-                    + out["landscape"] + transient)
+    transient = max(out["graph"], out["strains"], out["averaging"], out["level"])
+    out["total"] = (out["base"] + out["held"] + out["mesh"] + out["factorisation"]
+                    + out["boundary"] + out["landscape"] + transient)
     return out
 
 
@@ -732,7 +789,7 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
                                solvers=solvers, plan=plan, n_axes=n_axes)
     if est["total"] > MEMORY_BUDGET:
-        part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base")),
+        part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base", "held")),
                          key=lambda kv: kv[1])
         hint = {"strains": "restrict the pairs (--region, --min-sep/--max-sep) or coarsen the mesh",
                 "graph": "coarsen the boundary",

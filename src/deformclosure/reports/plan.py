@@ -43,17 +43,21 @@ def _pads(part, p: dict, progress) -> Report:
     from ..pads import PadContact
     from ..mesh.generate import twin_mesh
     from ..planning.pads import plan_pads
-    from ..pads.size_limits import check_pads_size
+    from ..limits import holding, kept_bytes
+    from ..pads.size_limits import WITH_TWIN, check_pads_size
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], max_area=p["max_area"])
-    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2,  # before the work
-                    n_axes=p["grid_angles"] * p["grid_offsets"])
+    est = check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN,  # before the work
+                          n_axes=p["grid_angles"] * p["grid_offsets"])
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
-    res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
-                    top=p["verify"], twin=twin, progress=progress, part=inp.part,
-                    rtol=p["rtol"], max_seconds=p["max_seconds"])
+    # the plan keeps its solvers and curves while it verifies: the verification's own
+    # size checks count them (limits.holding)
+    with holding(kept_bytes(est)):
+        res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
+                        top=p["verify"], twin=twin, progress=progress, part=inp.part,
+                        rtol=p["rtol"], max_seconds=p["max_seconds"])
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)

@@ -1,0 +1,107 @@
+"""Memory estimates against what the analyses really hold (issue 25).
+
+The estimate of a command (:func:`deformclosure.limits.check_plan_size`, recorded where
+the command calls it) is compared with the peak resident memory of a fresh interpreter
+running it (``ru_maxrss`` of the child, read by ``os.wait4``: the kernel's count, not
+the package's), and the bookkeeping of what earlier steps hold is checked on a run.
+``benchmarks/bench_memory.py`` prints the same comparison over a sweep of sizes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from deformclosure import limits
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+CHILD = r"""
+import json, sys
+import deformclosure.pads.size_limits as psl
+from deformclosure import reports
+seen = []
+orig = psl.check_plan_size
+def recorded(*a, **k):
+    est = orig(*a, **k)
+    seen.append(est["total"])
+    return est
+psl.check_plan_size = recorded
+reports.run(sys.argv[1], sys.argv[2], json.loads(sys.argv[3]))
+print("EST", max(seen))
+"""
+
+
+def peak_and_estimate(command: str, part: Path, params: dict) -> tuple[float, float]:
+    proc = subprocess.Popen([sys.executable, "-c", CHILD, command, str(part), json.dumps(params)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    out = proc.stdout.read().decode(errors="replace")
+    _, status, usage = os.wait4(proc.pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0, out[-2000:]
+    est = float([ln for ln in out.splitlines() if ln.startswith("EST ")][-1].split()[1])
+    return usage.ru_maxrss * 1024.0, est
+
+
+@pytest.mark.slow
+def test_optimize_estimate_bounds_its_peak_within_30_percent():
+    """One mesh and its twin of the notched bar (~2 800 nodes, the pads held in the
+    notches): the estimate is at least the measured peak and at most 1.3 times it."""
+    peak, est = peak_and_estimate("optimize", EXAMPLES / "notched_bar.json",
+                                  {"axis": "15,6,90", "pad_radius": 2.0, "refine": 1})
+    assert peak <= est <= 1.3 * peak, (peak / 1e9, est / 1e9)
+
+
+def test_holding_adds_to_every_estimate_and_is_released():
+    args = dict(n_nodes=2000, n_triangles=4000, n_boundary=150)
+    base = limits.estimate_model_bytes("pads", **args)
+    with limits.holding(3e8):
+        with limits.holding(2e8):
+            inner = limits.estimate_model_bytes("pads", **args)
+    assert inner["held"] == 5e8
+    assert inner["total"] == pytest.approx(base["total"] + 5e8, rel=1e-12)
+    with pytest.raises(RuntimeError):
+        with limits.holding(1e9):
+            raise RuntimeError
+    assert limits.estimate_model_bytes("pads", **args) == base
+    assert limits.kept_bytes(base) == pytest.approx(
+        base["mesh"] + base["factorisation"] + base["boundary"] + base["landscape"])
+
+
+def test_holding_refuses_what_would_not_fit_beside_it():
+    args = dict(n_nodes=2000, n_triangles=4000, n_boundary=150)
+    limits.check_plan_size(150, "pads", **{k: v for k, v in args.items() if k != "n_boundary"})
+    with limits.holding(limits.MEMORY_BUDGET):
+        with pytest.raises(limits.GraspError, match="GB"):
+            limits.check_plan_size(150, "pads", n_nodes=2000, n_triangles=4000)
+
+
+def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
+    """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
+    level (their solvers stay in the result), recomputed here from the recorded
+    estimates."""
+    import deformclosure as dc
+    import deformclosure.pads.size_limits as psl
+    from deformclosure.pads import GraspAxis, Pad, pad_grasp
+
+    seen = []
+    orig = psl.check_plan_size
+
+    def recorded(*a, **k):
+        est = orig(*a, **k)
+        seen.append(est)
+        return est
+
+    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
+    res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.01, max_seconds=60,
+                    n_angles=8, n_offsets=10, noise=False)
+    assert len(res.levels) >= 2 and len(seen) >= 2
+    kept = 0.0
+    for est in seen:
+        assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
+        kept += limits.kept_bytes(est)
