@@ -624,7 +624,7 @@ def check_ring_gaps(outer: np.ndarray, holes: Sequence[np.ndarray], diameter: fl
 
 
 # --------------------------------------------------------------------------- analyses
-_HELD = [0.0]       # bytes held by the enclosing analyses (:func:`holding`)
+_HELD: list[float] = []     # bytes held by the enclosing analyses, innermost last (:func:`holding`)
 
 
 @contextmanager
@@ -640,11 +640,11 @@ def holding(nbytes: float) -> Iterator[None]:
     ...     estimate_model_bytes("pads", n_nodes=1000, n_triangles=2000, n_boundary=100)["held"]
     1000000000.0
     """
-    _HELD[0] += float(nbytes)
+    _HELD.append(float(nbytes))
     try:
         yield
     finally:
-        _HELD[0] -= float(nbytes)
+        _HELD.pop()
 
 
 def kept_bytes(estimate: dict[str, float]) -> float:
@@ -707,7 +707,7 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
     """
     p = int(n_boundary)
     q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
-    out = {"base": BASE_BYTES, "held": _HELD[0], "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
+    out = {"base": BASE_BYTES, "held": math.fsum(_HELD), "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
            "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
            "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0}
     if model == "paper":
