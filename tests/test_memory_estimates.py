@@ -48,11 +48,16 @@ def peak_and_estimate(command: str, part: Path, params: dict) -> tuple[float, fl
 
 
 @pytest.mark.slow
-def test_optimize_estimate_bounds_its_peak_within_30_percent():
-    """One mesh and its twin of the notched bar (~2 800 nodes, the pads held in the
-    notches): the estimate is at least the measured peak and at most 1.3 times it."""
-    peak, est = peak_and_estimate("optimize", EXAMPLES / "notched_bar.json",
-                                  {"axis": "15,6,90", "pad_radius": 2.0, "refine": 1})
+@pytest.mark.parametrize("command, part, params", [
+    # one mesh and its twin of the notched bar (~2 800 nodes, the pads held in the notches)
+    ("optimize", "notched_bar.json", {"axis": "15,6,90", "pad_radius": 2.0, "refine": 1}),
+    # the README rectangle's fingers, one mesh of ~2 500 nodes
+    ("check", "rectangle.json", {"fingers": str(EXAMPLES / "fingers" / "rectangle.json"),
+                                 "refine": 1, "max_area": 0.077}),
+])
+def test_estimate_bounds_the_peak_within_30_percent(command, part, params):
+    """The estimate is at least the measured peak and at most 1.3 times it."""
+    peak, est = peak_and_estimate(command, EXAMPLES / part, params)
     assert peak <= est <= 1.3 * peak, (peak / 1e9, est / 1e9)
 
 

@@ -185,6 +185,11 @@ PADS_AXIS_BYTES_PER_NODE = 360.0
 #: nodes, beyond the curves of the axes solved); counted 3 500.
 PADS_LEVEL_BYTES_PER_TRIANGLE = 3_500.0
 
+#: The placement landscape's compiled kernels (numba, loaded from the cache) and their
+#: per-part arrays, held by ``check`` beside its solvers: measured 41-50 MB at 2 500 to
+#: 20 000 nodes (``benchmarks/bench_memory.py``).
+PLACEMENT_KERNEL_BYTES = 0.05 * GB
+
 #: Share of the grid's axes whose curves the release search of one pads ``optimize``
 #: level solves and keeps: measured 12-25 % (295-589 of 2400 axes, the notched bar held
 #: in its notches, every level of ``bench_memory.py``); counted a quarter. A plan solves

@@ -45,6 +45,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     from ..dspace.closure import deform_closure
     from ..dspace.escape import release_energy_fingers
     from ..dspace.fingers import load_fingers
+    from ..limits import PLACEMENT_KERNEL_BYTES, holding
     from ..pads.size_limits import WITH_TWIN, check_pads_size
 
     from ..pads.refine import check_accuracy, check_refine
@@ -60,7 +61,8 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     inp.sources.insert(1, fsrc)
     # at most two factorised meshes at once: the release landscape's and its twin's (the
     # rigid test's is released before them; measured, benchmarks/bench_memory.py)
-    check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN, what="check")
+    with holding(PLACEMENT_KERNEL_BYTES):
+        check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN, what="check")
 
     def solve(mesh, part=inp.part):
         # ``part``: the geometry of the twin realisation (noise floor), meshed as finely
@@ -109,6 +111,7 @@ def _refined(inp, fingers, solve, rtol: float | None, refine: int | None,
     from ..mesh import mesh_part
     from ..mesh.generate import default_max_area
     from ..pads.refine import DEFAULT_MAX_SECONDS, MAX_LEVELS
+    from ..limits import PLACEMENT_KERNEL_BYTES, holding
     from ..pads.size_limits import WITH_TWIN, check_pads_size
 
     budget = DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds)
@@ -127,7 +130,8 @@ def _refined(inp, fingers, solve, rtol: float | None, refine: int | None,
                 notify(f"level {k + 1} ..." if rtol is not None else f"mesh {k + 1} of {n_levels} ...")
             try:
                 mesh = mesh_part(inp.part, max_area=base / 4.0**k, points=pts)
-                check_pads_size(mesh, solvers=WITH_TWIN, what="check")
+                with holding(PLACEMENT_KERNEL_BYTES):
+                    check_pads_size(mesh, solvers=WITH_TWIN, what="check")
             except DeformClosureError as err:
                 levels[-1] += (f"memory or size limit at level {k + 1}: {err}",)
                 return levels
