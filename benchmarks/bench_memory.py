@@ -19,6 +19,35 @@ ratio and whether the estimate bounds the peak within +30 % (target: ``1 <= est/
 1.3``; ``est/peak < 1`` would accept what may not fit, larger would refuse what fits).
 ``--phases`` also prints, per command, the resident memory at each logged step.
 ``--quick``: 2 500 and 5 000 nodes only.
+
+Measured (issue 25, after the refit; 2 cores shared, one BLAS thread):
+
+    command                  nodes  est (GB)  peak (GB)  est/peak
+    optimize --refine 1      2,573     0.310      0.255      1.22
+    optimize --refine 1      5,094     0.373      0.299      1.25
+    optimize --refine 1     10,006     0.553      0.415      1.33
+    optimize --refine 1     20,015     0.817      0.704      1.16
+    optimize (rtol)          3,519     0.464      0.373      1.24
+    optimize (rtol)          5,660     0.551      0.435      1.27
+    optimize (rtol)         10,590     0.887      0.680      1.30
+    optimize (rtol)         20,621     1.346      1.098      1.23
+    plan --verify 1          3,656     0.655      0.482      1.36
+    plan --verify 1          5,684     0.794      0.561      1.41
+    plan --verify 1         10,601     1.342      1.029      1.30
+    plan --verify 1         20,637     2.037      1.641      1.24
+    check --refine 1         2,550     0.308      0.260      1.19
+    check --refine 1         5,045     0.363      0.296      1.22
+    check --refine 1        10,022     0.491      0.397      1.24
+    check --refine 1        19,939     0.724      0.544      1.33
+
+Before the refit the same sweep gave est/peak 1.60-1.86 (optimize --refine 1), 0.69-0.89
+(plan: its verification's levels were checked as if the plan held nothing) and
+0.88-2.04 (check). Extrapolated with the refitted costs to the notched bar at 85 000
+nodes: optimize 2.7 GB for one level and 4.6 GB for two (the issue measured 4.8 GB used
+by such a run; the second level is now refused and the run stops at the first, with its
+reason), a plan 3.0 GB screening and 4.9 GB for its first verification (refused up front;
+it used more than 5.5 GB), check 2.5 GB (accepted; 2.05 GB measured, formerly refused at
+an estimated 4.8 GB).
 """
 
 from __future__ import annotations
