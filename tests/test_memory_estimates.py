@@ -110,3 +110,32 @@ def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
     for est in seen:
         assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
         kept += limits.kept_bytes(est)
+
+
+def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):
+    """With the budget just above the screening's estimate, ``plan --verify 1`` is refused
+    before any work (the verification's first level beside the plan's solvers and curves
+    would not fit), and the same plan screens with ``--verify 0``."""
+    import deformclosure.pads.size_limits as psl
+    from deformclosure import reports
+    from deformclosure.errors import GraspError
+
+    seen = []
+    orig = psl.check_plan_size
+
+    def recorded(*a, **k):
+        est = orig(*a, **k)
+        seen.append(est["total"])
+        return est
+
+    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    part = EXAMPLES / "rectangle.json"
+    params = {"pad_radius": 1.0, "grid_angles": 4, "grid_offsets": 6, "verify": 0}
+    monkeypatch.setattr(limits, "MEMORY_BUDGET", 1e12)
+    reports.run("plan", part, {**params, "verify": 1, "max_area": 4.0})
+    screening, verification = seen[0], seen[1]
+    assert verification > screening
+    monkeypatch.setattr(limits, "MEMORY_BUDGET", 0.5 * (screening + verification))
+    with pytest.raises(GraspError, match=r"plan --verify .*--verify 0"):
+        reports.run("plan", part, {**params, "verify": 1, "max_area": 4.0})
+    reports.run("plan", part, {**params, "max_area": 4.0})

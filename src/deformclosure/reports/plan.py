@@ -54,10 +54,13 @@ def _pads(part, p: dict, progress) -> Report:
     if p["verify"] and inp.part is not None:
         # the plan keeps its solvers and curves while it verifies: the verification's
         # first level (optimize's code path on a mesh like the plan's) must fit beside them
-        with holding(kept_bytes(est)):
-            check_pads_size(inp.mesh, solvers=WITH_TWIN,   # its grid: twice the angles
-                            n_axes=search_axes(2 * p["grid_angles"], p["grid_offsets"]),
-                            what="plan --verify (beside the plan's solvers and curves)")
+        try:
+            with holding(kept_bytes(est)):
+                check_pads_size(inp.mesh, solvers=WITH_TWIN,   # its grid: twice the angles
+                                n_axes=search_axes(2 * p["grid_angles"], p["grid_offsets"]),
+                                what="plan --verify (beside the plan's solvers and curves)")
+        except GraspError as err:
+            raise GraspError(f"{err}; or screen only (--verify 0)") from None
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     # the verification's later levels count what the plan keeps (limits.holding)
