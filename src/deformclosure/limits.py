@@ -163,7 +163,8 @@ PAPER_GRAPH_BYTES_PER_P2 = 2_100.0
 #: compliances of the solver and of its noise-floor twin (:data:`PADS_SOLVER_BYTES_PER_P2`
 #: each; ``check`` holds three) and the contact curves of the release landscape
 #: (:data:`PADS_AXIS_BYTES_PER_NODE` per axis and node). Measured on a 2000-vertex circle:
-#: plan 2.9 GB (345 s), optimize 1.9 GB, check 1.9 GB.
+#: plan 2.9 GB (345 s; screening only, ``--verify 0``: verifying beside the plan's
+#: solvers and curves is estimated at 5.1 GB and refused), optimize 1.9 GB, check 1.9 GB.
 MAX_BOUNDARY_NODES_PADS = 2_000
 
 #: Bytes per ``p²`` kept by one pads solver (condensed and gauged compliances), and the
