@@ -124,7 +124,7 @@ def cases(folder: Path) -> list[tuple[str, str, list[str]]]:
     fingers.write_text(json.dumps({"units": "mm", "fingers": [
         {"type": "point", "at": [-10, 0]}, {"type": "point", "at": [10, 0]},
         {"type": "point", "at": [0, 10]}]}))
-    out.append(("check", f"{p_check:,} boundary nodes (circle), 3 solvers",
+    out.append(("check", f"{p_check:,} boundary nodes (circle), twin",
                 ["check", f, "--fingers", str(fingers)]))
 
     # averaging: nnz ≈ m + m² π ℓ² / A; a critical distance of 4 mm puts 97 % of the
