@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from deformclosure import limits
-from deformclosure.pads.size_limits import search_axes
+from deformclosure.pads.size_limits import WITH_TWIN, search_axes
 
 MAT = {"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1.0,
        "elastic_limit_strain": 0.8, "plane": "stress"}
@@ -56,7 +56,7 @@ def circle(k: int, r: float = 10.0) -> list:
     return np.column_stack([r * np.cos(t), r * np.sin(t)]).round(12).tolist()
 
 
-def largest_pads_block(solvers: int, ell_mm: float, n_axes: int = search_axes(48, 50)) -> int:
+def largest_pads_block(solvers: float, ell_mm: float, n_axes: int = search_axes(48, 50)) -> int:
     """Most triangles of a 12 x 20 mm block (critical distance ``ell_mm``) the pads
     estimate of ``optimize`` (default grid) accepts."""
     lo, hi = 1000, limits.MAX_TRIANGLES
@@ -139,8 +139,10 @@ def cases(folder: Path) -> list[tuple[str, str, list[str]]]:
     out.append(("optimize-pads-avg", f"~{0.97 * limits.MAX_AVERAGING_NONZEROS:.2g} averaging pairs "
                 f"(l = {ell:g} mm), twin", ["optimize", f, "--axis", "6,10,0", "--quiet"]))
 
-    # the factorisation: the largest block the pads estimate accepts (small critical distance)
-    m = largest_pads_block(2, 0.05)
+    # the factorisation: the largest block the pads estimate accepts (small critical
+    # distance), less 15 %: the mesher's count and the nodes per triangle (n ≈ m/2 + p/2)
+    # are estimates too, and a mesh just above the line is refused
+    m = int(0.85 * largest_pads_block(WITH_TWIN, 0.05))
     f = write(folder, "block_fact.json", {"outer": block, "mesh": {"max_area": 240.0 * 1.59 / m}})
     data = json.loads(Path(f).read_text())
     data["material"] = {**MAT, "critical_distance": 0.05}
