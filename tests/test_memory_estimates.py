@@ -15,6 +15,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from deformclosure import limits
@@ -139,3 +140,47 @@ def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):
     with pytest.raises(GraspError, match=r"plan --verify .*--verify 0"):
         reports.run("plan", part, {**params, "verify": 1, "max_area": 4.0})
     reports.run("plan", part, {**params, "max_area": 4.0})
+
+
+@pytest.mark.parametrize("e_L", [0.8, 0.05, 1e-12, 50.0])
+def test_elastic_limit_in_chunks_equals_all_breakpoints_at_once(e_L):
+    """``pad_elastic_limit`` with its breakpoints in groups (bounded memory) returns the
+    same σ_L, critical element, breakpoint maxima and element maximum (to 1e-12) as the
+    rule on every breakpoint at once (the implementation before the groups), on axes of
+    the notched bar: limits reached inside a piece, at the first breakpoint, never."""
+    import deformclosure as dc
+    import deformclosure.pads.limit as pl
+    from deformclosure.landscape.limit import path_elastic_limit
+    from deformclosure.pads import GraspAxis, Pad, PadContact
+
+    def reference(solver, curve, e_L):          # the rule on the whole stack, as before
+        ell = pl.critical_distance_of(solver.mesh)
+        F = np.column_stack([solver.load_vector(curve, l) for l in curve.path.lam])
+        E = solver.element_strains(solver.displacement(F))
+        lim = path_elastic_limit(pl.disc_average(solver.mesh, ell), E, e_L)
+        hit = lim.crossing
+        sigma = curve.sigma_end if not hit.reached else \
+            max(float(curve.sigma_at(float(hit.interpolate(curve.path.delta)))), 0.0)
+        return sigma, lim.critical_element, lim.e_breakpoints, lim.element_max
+
+    mesh = dc.mesh_part(dc.notched_part(1.0))
+    pc = PadContact(mesh)
+    checked = 0
+    for x, deg in ((0.015, 90.0), (0.012, 80.0), (0.02, 95.0)):
+        c = pc.curve(GraspAxis.at(np.array([x, 0.006]), np.radians(deg)), Pad(0.0, 0.002), 0.0)
+        if c.path is None or len(c.path.lam) < 4:
+            continue
+        old = pl.BREAKPOINT_CHUNK_BYTES
+        try:
+            pl.BREAKPOINT_CHUNK_BYTES = 1.0                 # groups of 2 breakpoints
+            got = pl.pad_elastic_limit(pc, c, e_L)
+        finally:
+            pl.BREAKPOINT_CHUNK_BYTES = old
+        sigma, elem, e_bp, e_max = reference(pc, c, e_L)
+        # the same to rounding: a solve of fewer load columns rounds in other places
+        assert got.sigma_L == pytest.approx(sigma, rel=1e-12, abs=1e-18)
+        assert got.critical_element == elem
+        np.testing.assert_allclose(got.e_breakpoints, e_bp, rtol=1e-12, atol=1e-18)
+        assert got.element_max_at_limit == pytest.approx(e_max, rel=1e-12, abs=1e-18)
+        checked += 1
+    assert checked >= 2

@@ -179,12 +179,28 @@ PADS_WORK_BYTES_PER_P2 = 100.0
 #: 1440 axes; earlier 180-210 on 500- and 1000-node circles); counted 360.
 PADS_AXIS_BYTES_PER_NODE = 360.0
 
-#: Bytes per triangle of a pads analysis' transient on one mesh: the displacement and
-#: strain fields of the elastic limit at the path's breakpoints, their critical-distance
-#: averages and the noise floor's twin curves, measured 2.5-4.5 kB beyond the
-#: :data:`AVERAGING_CHUNK_BYTES` (optimize on the notched bar at 2 500, 10 000 and 20 000
-#: nodes, beyond the curves of the axes solved); counted 3 500.
-PADS_LEVEL_BYTES_PER_TRIANGLE = 3_500.0
+#: Bytes per triangle of a pads analysis' transient on one mesh besides its elastic-limit
+#: fields: the averages' grid, the strain-displacement matrices, the noise floor's twin
+#: curves; fitted with the fields below to optimize on the notched bar at 2 500, 10 000
+#: and 20 000 nodes (transients of 2.5-4.5 kB per triangle in all).
+PADS_LEVEL_BYTES_PER_TRIANGLE = 2_000.0
+
+#: The elastic limit holds the loads, displacements and strains of every breakpoint of the
+#: start axis' path at once (``pads.limit.pad_elastic_limit``): bytes per breakpoint and
+#: triangle, measured 51-58 (12 × 20 mm block, 20 000 and 40 000 nodes), counted 60; and
+#: breakpoints per boundary node, measured 0.059-0.075 (the default pad, 5 000 to 40 000
+#: nodes), counted 0.1. Before the averages' grid was taken in groups of fields
+#: (``critical_distance.FIELD_CHUNK_BYTES``) a tiny ℓ cost 160 bytes per breakpoint and
+#: triangle more: a 120 000-node block accepted at 3.9 GB used 10 GB (issue 25).
+PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE = 60.0
+PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.1
+
+#: Most bytes of breakpoint loads, displacements and strains the pads' elastic limit holds
+#: at once (``pads.limit.pad_elastic_limit`` takes a longer path in groups of
+#: breakpoints): refined meshes put many more contacts, so breakpoints, under the pads
+#: than the boundary count predicts (a 53 000-node adaptive level: ~200 breakpoints,
+#: 1.5 GB before the groups).
+PADS_LIMIT_CHUNK_BYTES = 200e6
 
 #: The placement landscape's compiled kernels (numba, loaded from the cache) and their
 #: per-part arrays, held by ``check`` beside its solvers: measured 41-50 MB at 2 500 to
@@ -732,7 +748,12 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
         # the elastic limit's fields, their averages and the noise floor on the finest mesh
-        out["level"] = AVERAGING_CHUNK_BYTES + PADS_LEVEL_BYTES_PER_TRIANGLE * n_triangles
+        # breakpoints held at once: those the boundary predicts, at most a group's
+        group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
+        breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group)
+        out["level"] = AVERAGING_CHUNK_BYTES + (
+            PADS_LEVEL_BYTES_PER_TRIANGLE
+            + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
