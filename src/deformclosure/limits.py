@@ -182,18 +182,19 @@ PADS_AXIS_BYTES_PER_NODE = 360.0
 #: Bytes per triangle of a pads analysis' transient on one mesh besides its elastic-limit
 #: fields: the averages' grid, the strain-displacement matrices, the noise floor's twin
 #: curves; fitted with the fields below to optimize on the notched bar at 2 500, 10 000
-#: and 20 000 nodes (transients of 2.5-4.5 kB per triangle in all).
-PADS_LEVEL_BYTES_PER_TRIANGLE = 2_000.0
+#: and 20 000 nodes (transients of 2.5-4.5 kB per triangle in all before the limit's
+#: groups, ~2 kB after).
+PADS_LEVEL_BYTES_PER_TRIANGLE = 1_000.0
 
 #: The elastic limit holds the loads, displacements and strains of every breakpoint of the
 #: start axis' path at once (``pads.limit.pad_elastic_limit``): bytes per breakpoint and
 #: triangle, measured 51-58 (12 × 20 mm block, 20 000 and 40 000 nodes), counted 60; and
 #: breakpoints per boundary node, measured 0.059-0.075 (the default pad, 5 000 to 40 000
-#: nodes), counted 0.1. Before the averages' grid was taken in groups of fields
+#: nodes), counted 0.075. Before the averages' grid was taken in groups of fields
 #: (``critical_distance.FIELD_CHUNK_BYTES``) a tiny ℓ cost 160 bytes per breakpoint and
 #: triangle more: a 120 000-node block accepted at 3.9 GB used 10 GB (issue 25).
 PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE = 60.0
-PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.1
+PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.075
 
 #: Most bytes of breakpoint loads, displacements and strains the pads' elastic limit holds
 #: at once (``pads.limit.pad_elastic_limit`` takes a longer path in groups of
