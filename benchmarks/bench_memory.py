@@ -40,10 +40,10 @@ whole solvers for what they keep).
 Before the refit the same sweep gave est/peak 1.60-1.86 (optimize --refine 1), 0.69-0.89
 (plan: its verification's levels were checked as if the plan held nothing) and
 0.88-2.04 (check). Extrapolated with the refitted costs to the notched bar at 85 000
-nodes: optimize 2.7 GB for one level and 4.6 GB for two (the issue measured 4.8 GB used
+nodes: optimize 2.5 GB for one level and 4.4 GB for two (the issue measured 4.8 GB used
 by such a run; the second level is now refused and the run stops at the first, with its
-reason), a plan 3.0 GB screening and 4.9 GB for its first verification (refused up front;
-it used more than 5.5 GB), check 2.5 GB (accepted; 2.05 GB measured, formerly refused at
+reason), a plan 2.8 GB screening and 4.8 GB for its first verification (refused up front;
+it used more than 5.5 GB), check 2.2 GB (accepted; 2.05 GB measured, formerly refused at
 an estimated 4.8 GB).
 """
 
