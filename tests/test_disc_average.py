@@ -328,3 +328,29 @@ def test_a_full_operator_beyond_the_memory_budget_is_refused_but_averages_are_no
     E = np.broadcast_to([1e-3, -2e-3, 5e-4], (mesh.n_triangles, 3))   # homogeneous
     assert averaged_strain_maximum(mesh, E, 1.0) == pytest.approx(magnitude(E[:1])[0],
                                                                   rel=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), args=mesh_args, cells=ell_cells,
+       k=st.integers(2, 9), kind=kinds, group=st.integers(1, 4))
+def test_maxima_in_groups_of_fields_equal_all_at_once(seed, args, cells, k, kind, group):
+    """Fields taken in groups (bounded memory for many breakpoints, issue 25) give the
+    same maxima and elements, bit for bit, as all fields at once, and both equal the full
+    operator's."""
+    rng = np.random.default_rng(seed)
+    mesh = grid_mesh(rng, **args)
+    ell = cells * args["scale"] * min(1.0, args["stretch"])
+    E = fields(rng, mesh, k, kind)
+    disc = DiscAverage(mesh, ell)
+    old = cd.FIELD_CHUNK_BYTES
+    try:
+        cd.FIELD_CHUNK_BYTES = 1e300
+        v_all, e_all = disc.maxima(E)
+        ncells = disc._grid_shape[0] * disc._grid_shape[1] if ell > 0 else 1
+        cd.FIELD_CHUNK_BYTES = group * cd.FIELD_BYTES_PER_CELL * ncells
+        v_grp, e_grp = disc.maxima(E)
+    finally:
+        cd.FIELD_CHUNK_BYTES = old
+    np.testing.assert_array_equal(v_grp, v_all)
+    np.testing.assert_array_equal(e_grp, e_all)
+    assert_maxima(disc, reference_operator(mesh, ell), E)

@@ -25,14 +25,19 @@ is estimated beside the model and passed here as numbers:
 
 The CLI builds its ``--help`` texts from the maxima (:func:`limits_help`), so importing
 this module loads no numpy or shapely: the functions that need them import them.
+
+CPU threads are a resource too: :func:`blas_threads` caps the BLAS threads of the dense
+steps (:data:`BLAS_THREADS`), the one place the package sets them (threadpoolctl,
+imported on first use).
 """
 
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 from numbers import Integral
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Iterator, Sequence
 
 from .choices import MODELS, choose
 from .errors import DeformClosureError, GraspError, PartError
@@ -71,6 +76,10 @@ __all__ = [
     "check_slice_size",
     "format_count",
     "limits_help",
+    "holding",
+    "kept_bytes",
+    "BLAS_THREADS",
+    "blas_threads",
 ]
 
 GB = 1e9
@@ -80,8 +89,9 @@ GB = 1e9
 MEMORY_BUDGET = 4.0 * GB
 
 #: Resident memory of the interpreter with numpy, scipy, shapely, numba and the package
-#: imported (bytes), measured.
-BASE_BYTES = 0.2 * GB
+#: imported (bytes), measured: 0.15-0.17 GB at a command's first factorisation
+#: (``benchmarks/bench_memory.py``).
+BASE_BYTES = 0.16 * GB
 
 #: Largest coordinate magnitude accepted in a part file or a drawing (in its units);
 #: beyond it, areas overflow and the geometry checks are meaningless.
@@ -149,9 +159,12 @@ _VERTEX_BASE = 2.8
 _VERTEX_PER_HALVING = 0.36
 
 # --------------------------------------------------------------------------- analyses
-#: Sparse LU of ``K`` (METIS nested dissection, SuperLU): bytes per ``n log2 n`` (n = mesh
-#: nodes), measured 1.05 GB at 79 000 nodes and 5.2 GB at 398 000 (unit-aspect parts).
-FACTOR_BYTES_PER_NLOGN = 700.0
+#: Sparse LU of ``K`` (METIS nested dissection, SuperLU without pivoting) and the
+#: factorised solver's other per-node arrays: bytes per ``n log2 n`` (n = mesh nodes).
+#: Measured (``benchmarks/bench_memory.py``, issue 25) as a solver's resident memory less
+#: its mesh and boundary terms: 300 at 5 000 nodes, 310 at 20 000, 340 at 40 000 (12 × 20
+#: mm block); counted 360.
+FACTOR_BYTES_PER_NLOGN = 360.0
 
 #: Bytes per mesh triangle held by a mesh, its stiffness matrix and their temporaries.
 MESH_BYTES_PER_TRIANGLE = 1_000.0
@@ -176,18 +189,56 @@ PAPER_GRAPH_BYTES_PER_P2 = 2_100.0
 #: compliances of the solver and of its noise-floor twin (:data:`PADS_SOLVER_BYTES_PER_P2`
 #: each; ``check`` holds three) and the contact curves of the release landscape
 #: (:data:`PADS_AXIS_BYTES_PER_NODE` per axis and node). Measured on a 2000-vertex circle:
-#: plan 2.9 GB (345 s), optimize 1.9 GB, check 1.9 GB.
+#: plan 2.9 GB (345 s; screening only, ``--verify 0``: verifying beside the plan's
+#: solvers and curves is estimated at 5.1 GB and refused), optimize 1.9 GB, check 1.9 GB.
 MAX_BOUNDARY_NODES_PADS = 2_000
 
-#: Bytes per ``p²`` kept by one pads solver (condensed and axis-constrained compliances),
-#: measured 215 (one and two solvers on a 1000-node circle), and the transient of building
-#: one, 55.
-PADS_SOLVER_BYTES_PER_P2 = 215.0
-PADS_WORK_BYTES_PER_P2 = 55.0
+#: Bytes per ``p²`` kept by one pads solver (condensed and gauged compliances), and the
+#: transient of building one: measured 167 and 95 (a solver of a 2000-vertex circle,
+#: 5 900 nodes: 0.67 GB kept, 1.05 GB at its peak; 165 and 100 at 1000 vertices; issue 25,
+#: earlier 215 and 55 with the previous condensation).
+PADS_SOLVER_BYTES_PER_P2 = 170.0
+PADS_WORK_BYTES_PER_P2 = 100.0
 
-#: Bytes per grasp axis and boundary node of the release landscape's contact curves,
-#: measured 180-210 (plans of 500- and 1000-node circles, 1440 axes).
-PADS_AXIS_BYTES_PER_NODE = 210.0
+#: Bytes per grasp axis and boundary node of the release landscape's contact curves and
+#: their caches, measured 310-350 (plans of the notched bar at 3 600 and 10 600 nodes,
+#: 1440 axes; earlier 180-210 on 500- and 1000-node circles); counted 360.
+PADS_AXIS_BYTES_PER_NODE = 360.0
+
+#: Bytes per triangle of a pads analysis' transient on one mesh besides its elastic-limit
+#: fields: the averages' grid, the strain-displacement matrices, the noise floor's twin
+#: curves; fitted with the fields below to optimize on the notched bar at 2 500, 10 000
+#: and 20 000 nodes (transients of 2.5-4.5 kB per triangle in all before the limit's
+#: groups, ~2 kB after).
+PADS_LEVEL_BYTES_PER_TRIANGLE = 1_000.0
+
+#: The elastic limit holds the loads, displacements and strains of every breakpoint of the
+#: start axis' path at once (``pads.limit.pad_elastic_limit``): bytes per breakpoint and
+#: triangle, measured 51-58 (12 × 20 mm block, 20 000 and 40 000 nodes), counted 60; and
+#: breakpoints per boundary node, measured 0.059-0.075 (the default pad, 5 000 to 40 000
+#: nodes), counted 0.075. Before the averages' grid was taken in groups of fields
+#: (``critical_distance.FIELD_CHUNK_BYTES``) a tiny ℓ cost 160 bytes per breakpoint and
+#: triangle more: a 120 000-node block accepted at 3.9 GB used 10 GB (issue 25).
+PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE = 60.0
+PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.075
+
+#: Most bytes of breakpoint loads, displacements and strains the pads' elastic limit holds
+#: at once (``pads.limit.pad_elastic_limit`` takes a longer path in groups of
+#: breakpoints): refined meshes put many more contacts, so breakpoints, under the pads
+#: than the boundary count predicts (a 53 000-node adaptive level: ~200 breakpoints,
+#: 1.5 GB before the groups).
+PADS_LIMIT_CHUNK_BYTES = 200e6
+
+#: The placement landscape's compiled kernels (numba, loaded from the cache) and their
+#: per-part arrays, held by ``check`` beside its solvers: measured 41-50 MB at 2 500 to
+#: 20 000 nodes (``benchmarks/bench_memory.py``).
+PLACEMENT_KERNEL_BYTES = 0.05 * GB
+
+#: Share of the grid's axes whose curves the release search of one pads ``optimize``
+#: level solves and keeps: measured 12-25 % (295-589 of 2400 axes, the notched bar held
+#: in its notches, every level of ``bench_memory.py``); counted a quarter. A plan solves
+#: every axis of its grid.
+PADS_SEARCH_AXES_FRACTION = 0.25
 
 #: Largest number of element pairs of the critical-distance averages (pads model, SPEC §6):
 #: every element times the elements whose centroids lie within the critical distance ℓ
@@ -225,6 +276,7 @@ MAX_SLICE_RESOLUTION = 2_000
 SLICE_JSON_BYTES_PER_VALUE = 60.0
 
 
+<<<<<<< HEAD
 def check_body_size(field: str, value: float, diameter: float, lo: float, *,
                     scale: float = 1.0, units: str = "m", hint: str = "") -> None:
     """Refuse a finger or pad size outside ``lo``..:data:`MAX_BODY_FRACTION` times the
@@ -251,6 +303,64 @@ def check_body_size(field: str, value: float, diameter: float, lo: float, *,
                                  f"{MAX_BODY_FRACTION * D:.3g} {units} ({lo:g} to "
                                  f"{MAX_BODY_FRACTION:g} times the part's diameter, {D:.4g} "
                                  f"{units}){hint}")
+=======
+# --------------------------------------------------------------------------- threads
+#: BLAS threads of the package's dense steps: the loops over many small problems (one
+#: contact path per grasp axis, the planner's screening, a landscape's placements), the
+#: condensation's boundary inverse and the gauged compliance. Their matrices have a few
+#: hundred to a few thousand rows; more threads gain nothing there and lose badly to the
+#: machine's other processes (OpenBLAS threads spin while they wait). Measured on a 2-core
+#: machine under load: LAPACK ``dpotri`` of a 2000 × 2000 factor 0.18 s on one thread and
+#: 6-7 s on the default two; the pads ``optimize`` of a 5 600-node notched bar 8.5 s with
+#: the default threads and 3.4 s with one (``benchmarks/bench_threads.py``). ``None``
+#: leaves the threads as they are (e.g. a large idle machine running one job). More cores
+#: pay off across jobs instead: batch workers or a Dask cluster (README "Using more
+#: cores").
+BLAS_THREADS: int | None = 1
+
+_CONTROLLER = None
+_DEPTH = 0          # blas_threads blocks entered and not left
+
+
+def _controller():
+    """The process's threadpoolctl controller, made once (it scans the loaded libraries,
+    so numpy's and scipy's BLAS are loaded before it)."""
+    global _CONTROLLER
+    if _CONTROLLER is None:
+        import numpy  # noqa: F401  (their BLAS libraries, before the scan)
+        import scipy.linalg  # noqa: F401
+        from threadpoolctl import ThreadpoolController
+
+        _CONTROLLER = ThreadpoolController()
+    return _CONTROLLER
+
+
+@contextmanager
+def blas_threads() -> Iterator[None]:
+    """Run the block with at most :data:`BLAS_THREADS` BLAS threads (restored after).
+
+    Put it around a loop over many small solves, or inside one dense step. The limit is
+    the process's (BLAS has no other): entering sets it (about 30 µs), a block nested in
+    another costs nothing, and leaving the outermost restores the threads.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> with blas_threads():
+    ...     float(np.ones((3, 3)) @ np.ones(3) @ np.ones(3))
+    9.0
+    """
+    global _DEPTH
+    if BLAS_THREADS is None or _DEPTH:
+        yield
+        return
+    with _controller().limit(limits=int(BLAS_THREADS), user_api="blas"):
+        _DEPTH += 1
+        try:
+            yield
+        finally:
+            _DEPTH -= 1
+>>>>>>> perf
 
 
 def format_count(n: float) -> str:
@@ -592,6 +702,36 @@ def check_ring_gaps(outer: np.ndarray, holes: Sequence[np.ndarray], diameter: fl
 
 
 # --------------------------------------------------------------------------- analyses
+_HELD: list[float] = []     # bytes held by the enclosing analyses, innermost last (:func:`holding`)
+
+
+@contextmanager
+def holding(nbytes: float) -> Iterator[None]:
+    """Count ``nbytes`` (an estimate of what the caller keeps) in every memory estimate
+    made inside the block: the estimates of later steps of one analysis see what the
+    earlier ones still hold — the solvers of a refinement's coarser levels, a plan's
+    solvers and curves while it verifies its best axes.
+
+    Examples
+    --------
+    >>> with holding(1e9):
+    ...     estimate_model_bytes("pads", n_nodes=1000, n_triangles=2000, n_boundary=100)["held"]
+    1000000000.0
+    """
+    _HELD.append(float(nbytes))
+    try:
+        yield
+    finally:
+        _HELD.pop()
+
+
+def kept_bytes(estimate: dict[str, float]) -> float:
+    """What an analysis keeps after it ran, of its :func:`estimate_model_bytes`: its
+    meshes, factorisations, boundary matrices and landscape curves (not the base, the
+    transients or what its callers hold)."""
+    return sum(estimate[k] for k in ("mesh", "factorisation", "boundary", "landscape"))
+
+
 def _factor_bytes(n_nodes: int) -> float:
     n = max(int(n_nodes), 2)
     return FACTOR_BYTES_PER_NLOGN * n * math.log2(n)
@@ -634,16 +774,20 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
     Returns
     -------
     dict
-        ``{"base", "mesh", "factorisation", "boundary", "landscape", "graph", "averaging",
-        "strains", "total"}`` (bytes). The total holds the base, mesh, factorisation and boundary
+        ``{"base", "held", "mesh", "factorisation", "boundary", "landscape", "graph",
+        "averaging", "level", "strains", "total"}`` (bytes). The total holds the base,
+        what enclosing steps hold (:func:`holding`), mesh, factorisation and boundary
         matrices, plus the largest of the transients (graph construction, strain
-        responses, averaging operator), which come one after another.
+        responses, the averages, a pads level's elastic-limit fields), which come one
+        after another. The costs per unit are measured with
+        ``benchmarks/bench_memory.py`` (every command) and ``benchmarks/bench_limits.py``
+        (at the maxima).
     """
     p = int(n_boundary)
     q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
-    out = {"base": BASE_BYTES, "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
+    out = {"base": BASE_BYTES, "held": math.fsum(_HELD), "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
            "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
-           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "strains": 0.0}
+           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0}
     if model == "paper":
         out["graph"] = PAPER_GRAPH_BYTES_PER_P2 * q * q
         if plan:
@@ -652,17 +796,27 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         k = max(float(solvers), 1.0)
         out["mesh"] *= k
         out["factorisation"] *= k
-        out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * k + PADS_WORK_BYTES_PER_P2) * p * p
+        # a twin has fewer nodes, but not always a shorter boundary (a ring's vertices are
+        # kept: a 2000-vertex circle's twin has 2000 boundary nodes too): whole solvers here
+        out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9)
+                           + PADS_WORK_BYTES_PER_P2) * p * p
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
+        # the elastic limit's fields, their averages and the noise floor on the finest mesh
+        # breakpoints held at once: those the boundary predicts, at most a group's
+        group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
+        breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group)
+        out["level"] = AVERAGING_CHUNK_BYTES + (
+            PADS_LEVEL_BYTES_PER_TRIANGLE
+            + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
     # one after another: the largest of these transients adds to what stays.
-    transient = max(out["graph"], out["strains"], out["averaging"])
-    out["total"] = (out["base"] + out["mesh"] + out["factorisation"] + out["boundary"]
-                    + out["landscape"] + transient)
+    transient = max(out["graph"], out["strains"], out["averaging"], out["level"])
+    out["total"] = (out["base"] + out["held"] + out["mesh"] + out["factorisation"]
+                    + out["boundary"] + out["landscape"] + transient)
     return out
 
 
@@ -721,7 +875,7 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
                                solvers=solvers, plan=plan, n_axes=n_axes)
     if est["total"] > MEMORY_BUDGET:
-        part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base")),
+        part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base", "held")),
                          key=lambda kv: kv[1])
         hint = {"strains": "restrict the pairs (--region, --min-sep/--max-sep) or coarsen the mesh",
                 "graph": "coarsen the boundary",

@@ -45,6 +45,7 @@ from ..elasticity.condense import CondensedCompliance
 from ..elasticity.critical_distance import averaging_operator
 from ..elasticity.solve import rigid_modes
 from ..elasticity.stiffness import element_b_matrices, stiffness_matrix
+from ..limits import blas_threads
 
 __all__ = ["BoundaryCompliance", "gauge_functionals", "nodal_areas", "mean_rotation_row"]
 
@@ -153,13 +154,14 @@ class BoundaryCompliance:
         self.centroid = (w[:, None] * nodes).sum(0) / w.sum()
         R = rigid_modes(nodes - self.centroid)
         G = gauge_functionals(mesh)
-        H = np.linalg.inv(R.T @ G.T)              # = I up to rounding (G R = I)
-        ZG = self.cc.solve(G.T)
-        bd = np.column_stack([2 * self.boundary, 2 * self.boundary + 1]).ravel()
-        A = R[bd] @ H.T
-        # Y_bb = [(I − R Hᵀ G) Z (I − Gᵀ H Rᵀ)]_bb = Z_bb − T − Tᵀ + A (G Z Gᵀ) Aᵀ
-        T = ZG[bd] @ A.T
-        Y = self.cc.C - T - T.T + A @ (G @ ZG) @ A.T
+        with blas_threads():      # dense steps of a few thousand rows (limits.BLAS_THREADS)
+            H = np.linalg.inv(R.T @ G.T)              # = I up to rounding (G R = I)
+            ZG = self.cc.solve(G.T)
+            bd = np.column_stack([2 * self.boundary, 2 * self.boundary + 1]).ravel()
+            A = R[bd] @ H.T
+            # Y_bb = [(I − R Hᵀ G) Z (I − Gᵀ H Rᵀ)]_bb = Z_bb − T − Tᵀ + A (G Z Gᵀ) Aᵀ
+            T = ZG[bd] @ A.T
+            Y = self.cc.C - T - T.T + A @ (G @ ZG) @ A.T
         self.Y = 0.5 * (Y + Y.T)
         self.G = G
         self._R, self._H = R, H
@@ -198,9 +200,10 @@ class BoundaryCompliance:
         """Displacement ``Pᵀ Z P f`` (m) of the gauged part under loads ``f`` (N),
         shape ``(2n,)`` or ``(2n, r)``; ``G u = 0``."""
         R, G, H = self._R, self.G, self._H
-        fp = f - G.T @ (H @ (R.T @ f))
-        v = self.cc.solve(fp)
-        return v - R @ (H.T @ (G @ v))
+        with blas_threads():
+            fp = f - G.T @ (H @ (R.T @ f))
+            v = self.cc.solve(fp)
+            return v - R @ (H.T @ (G @ v))
 
     def delassus(self, nodes: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """Contact compliance ``W = N Y Nᵀ`` (m/N), shape (k, k), of unit normals

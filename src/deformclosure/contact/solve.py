@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..limits import blas_threads
 from .lcp import solve_lcp
 from .path import ContactPath, trace_contact_path
 from .qp import solve_balanced_dual
@@ -119,12 +120,13 @@ def solve_contact(problem: ContactProblem, *, warm: np.ndarray | None = None) ->
     W = np.asarray(problem.W, float)
     q = np.asarray(problem.gap, float)
     B = problem.balance
-    if B is None or len(B) == 0:
-        lam, ok = solve_lcp(W, q, warm)
-        if ok:
-            return ContactSolution(lam, np.zeros(0), lam > 0, np.zeros((0, 0)), True)
-        B = np.zeros((0, len(q)))
-    lam, y, N, active = solve_balanced_dual(W, q, np.asarray(B, float))
+    with blas_threads():          # a small dense problem, one of many (limits.BLAS_THREADS)
+        if B is None or len(B) == 0:
+            lam, ok = solve_lcp(W, q, warm)
+            if ok:
+                return ContactSolution(lam, np.zeros(0), lam > 0, np.zeros((0, 0)), True)
+            B = np.zeros((0, len(q)))
+        lam, y, N, active = solve_balanced_dual(W, q, np.asarray(B, float))
     return ContactSolution(lam, y, active, N, True)
 
 
@@ -139,5 +141,6 @@ def trace_contact(problem: ContactProblem, delta_max: float, *, gap_tol: float,
     """
     if problem.rate is None or problem.balance is None or len(problem.balance) != 1:
         raise ValueError("trace_contact needs the squeeze rates and one balance row")
-    return trace_contact_path(problem.W, problem.gap, problem.rate, problem.balance[0],
-                              delta_max, gap_tol=gap_tol, max_pieces=max_pieces)
+    with blas_threads():          # a small dense problem, one of many (limits.BLAS_THREADS)
+        return trace_contact_path(problem.W, problem.gap, problem.rate, problem.balance[0],
+                                  delta_max, gap_tol=gap_tol, max_pieces=max_pieces)

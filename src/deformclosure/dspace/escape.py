@@ -70,6 +70,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..errors import DeformClosureError
+from ..limits import blas_threads
 from ..landscape.noise import (JITTER_FACTOR, ROUND_OFF, higher, jitter_floor, quadratic_residual,
                                resolved, twin_floor)
 from ..landscape.search import Escape, minimax_escape
@@ -679,9 +680,11 @@ def release_energy_fingers(mesh: Any, fingers: Sequence[Finger], *, part: Any = 
     """
     fingers = as_fingers(fingers)
     _check_lattice(n_translation, levels, max_evaluations)
-    return _release(mesh, fingers, part=part, solver=solver, start=start, rigid_closed=rigid_closed,
-                    n_translation=n_translation, levels=levels, noise=noise, twin=twin, stop_above=stop_above,
-                    max_evaluations=max_evaluations, say=_reporter(progress), count=count)
+    with blas_threads():          # a loop over placements: small solves (limits.BLAS_THREADS)
+        return _release(mesh, fingers, part=part, solver=solver, start=start, rigid_closed=rigid_closed,
+                        n_translation=n_translation, levels=levels, noise=noise, twin=twin,
+                        stop_above=stop_above, max_evaluations=max_evaluations,
+                        say=_reporter(progress), count=count)
 
 
 #: The lattice key of the equilibrium placement.

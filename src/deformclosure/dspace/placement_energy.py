@@ -94,6 +94,7 @@ from numba import njit
 # of contact/lcp.py, delete this package's __pycache__/*.nbi, *.nbc or the kernels keep the
 # old bpp_kernel (numba's documented limit on functions from other files)
 from ..contact.lcp import bpp_kernel
+from ..limits import blas_threads
 from ..contact.bodies import KERNEL_DISC, KERNEL_HALFPLANE, KERNEL_POINT, KERNEL_POLYGON, Finger
 from .obstacles import BoundaryModel, resolve_tolerance
 from .placement import MAX_DEPTH_RATIO
@@ -1017,8 +1018,9 @@ class PlacementEnergy:
         3 unconverged.
         """
         G = np.ascontiguousarray(np.asarray(G, float).reshape(-1, 3))
-        return _batch(G, self.tol, self.depth_limit, self.energy_cap, bool(chain), *self._args(), self._ypos,
-                      self._Y, self._cap)
+        with blas_threads():      # one small LCP per placement (limits.BLAS_THREADS)
+            return _batch(G, self.tol, self.depth_limit, self.energy_cap, bool(chain), *self._args(),
+                          self._ypos, self._Y, self._cap)
 
     # ---------------------------------------------------------------- placement geometry
     def place(self, g: Any, points: Any) -> np.ndarray:

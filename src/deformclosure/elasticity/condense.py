@@ -22,6 +22,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import StiffnessError
+from ..limits import blas_threads
 from ..log import done
 from .solve import PinnedFactorisation, pinned_dofs
 
@@ -153,7 +154,8 @@ def _schur_inverse(lu: spla.SuperLU, start: int) -> np.ndarray:
         raise StiffnessError("stiffness is singular or indefinite beyond the 3 rigid modes; "
                              "the mesh is disconnected or a mechanism")
     R = np.asfortranarray(L22 * np.sqrt(d)[None, :])
-    Cl, info = sla.lapack.dpotri(R, lower=1, overwrite_c=1)
+    with blas_threads():      # dpotri loses 30x to a second thread under load (limits.BLAS_THREADS)
+        Cl, info = sla.lapack.dpotri(R, lower=1, overwrite_c=1)
     if info != 0:
         raise StiffnessError("condensed stiffness is not positive definite; K has more than "
                              "3 zero-energy modes")

@@ -60,6 +60,14 @@ CHUNK_PAIRS = 400_000
 #: products), measured by ``benchmarks/bench_critical_distance.py``.
 DISC_BYTES_PER_PAIR = 100.0
 
+#: Largest memory (bytes) of the per-field grid arrays of :meth:`DiscAverage.maxima` at
+#: once (cell maxima, their filtered bounds and the masks made from them, about
+#: :data:`FIELD_BYTES_PER_CELL` per cell and field): more fields are taken in groups. A
+#: tiny ℓ has up to 4 cells per element, so ``k`` fields at once held ~160 k·m bytes —
+#: 3 GB for the 100 breakpoints of a 50 000-node part (issue 25).
+FIELD_CHUNK_BYTES = 40e6
+FIELD_BYTES_PER_CELL = 48.0
+
 #: Grid cells per critical distance of the bound on each disc's largest element strain
 #: (finer: a tighter bound, more cells to scan).
 CELLS_PER_ELL = 4
@@ -555,6 +563,14 @@ class DiscAverage:
         """
         E, single = _as_stack(self.m, strains)
         k = len(E)
+        cells = self._grid_shape[0] * self._grid_shape[1] if self.ell > 0.0 else 1
+        group = max(1, int(FIELD_CHUNK_BYTES // (FIELD_BYTES_PER_CELL * cells)))
+        if self.ell > 0.0 and k > group:
+            # each field's maximum is its own (the pruning only skips rows that cannot
+            # reach it; ties go to the first element): groups of fields, bounded memory
+            parts = [self.maxima(E[a:a + group]) for a in range(0, k, group)]
+            return (np.concatenate([v for v, _ in parts]),
+                    np.concatenate([i for _, i in parts]))
         best = np.full(k, -1.0)
         arg = np.zeros(k, np.int64)
         if self.ell == 0.0:

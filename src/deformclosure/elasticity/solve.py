@@ -15,6 +15,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import StiffnessError
+from ..limits import blas_threads
 
 __all__ = ["rigid_modes", "pinned_dofs", "PinnedFactorisation", "FreeBodySolver"]
 
@@ -76,7 +77,8 @@ class PinnedFactorisation:
         """``splu(Kf, **options)``; a singular ``Kf`` is a mesh with more than the three
         rigid zero-energy modes."""
         try:
-            return spla.splu(sp.csc_matrix(Kf), **options)
+            with blas_threads():      # SuperLU's supernode BLAS (limits.BLAS_THREADS)
+                return spla.splu(sp.csc_matrix(Kf), **options)
         except RuntimeError as err:
             raise StiffnessError(f"stiffness is singular beyond the 3 rigid modes ({err}); "
                                  "the mesh is disconnected or a mechanism") from None
@@ -89,7 +91,8 @@ class PinnedFactorisation:
         """
         f = np.asarray(f, float)
         u = np.zeros(f.shape)
-        u[self.free_dofs] = self._lu.solve(np.ascontiguousarray(f[self.free_dofs]))
+        with blas_threads():
+            u[self.free_dofs] = self._lu.solve(np.ascontiguousarray(f[self.free_dofs]))
         return u
 
     def project_out_rigid(self, u: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ from ..contact.compliance import BoundaryCompliance
 from ..contact.path import ContactPath
 from ..contact.solve import ContactProblem, trace_contact
 from ..geometry import touch_tolerance
+from ..limits import blas_threads
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 
 __all__ = ["PadContact", "GraspCurve", "hole_containing"]
@@ -204,6 +205,11 @@ class PadContact(BoundaryCompliance):
         ``sigma_end``. Expanding: the pads open from inside hole ``hole`` (index into
         ``mesh.hole_loops``), ``σ`` up to ``sigma_end``.
         """
+        with blas_threads():      # one axis of many: small dense steps (limits.BLAS_THREADS)
+            return self._curve(axis, pad, sigma_end, hole)
+
+    def _curve(self, axis: GraspAxis, pad: Pad, sigma_end: float,
+               hole: int | None) -> GraspCurve:
         empty = GraspCurve(axis, pad, None, np.zeros(0, int), np.zeros(0, int),
                            np.zeros((0, 2)), None)
         if hole is None:

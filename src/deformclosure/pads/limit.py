@@ -8,13 +8,14 @@ squeeze where the strain measure reaches ``e_L`` is the one elastic-limit rule o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..elasticity.critical_distance import (averaged_strain_maximum, averaged_strains,
                                             critical_distance_of, disc_average)
 from ..errors import GraspError
+from ..limits import PADS_LIMIT_CHUNK_BYTES
 from ..landscape.limit import first_limit_crossing, path_elastic_limit, strain_measure
 from .contact import GraspCurve, PadContact
 
@@ -89,8 +90,13 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     mesh = solver.mesh
     ell = critical_distance_of(mesh) if ell is None else ell
     path = curve.path
-    F = np.column_stack([solver.load_vector(curve, l) for l in path.lam])
-    E = solver.element_strains(solver.displacement(F))           # (k, m, 3)
+    k = len(path.lam)
+    # loads, displacements and strains of a breakpoint: (2n + 2n + 3m) doubles and the
+    # solve's and the strains' temporaries, about twice that
+    per = max(2, int(BREAKPOINT_CHUNK_BYTES // (16.0 * (4 * mesh.n_nodes + 3 * mesh.n_triangles))))
+    if operator is None and k > per:
+        return _limit_in_chunks(solver, curve, e_L, ell, per)
+    E = _breakpoint_strains(solver, curve, range(k))             # (k, m, 3)
     if operator is None:            # the one rule (landscape.limit), on the discs it needs
         lim = path_elastic_limit(disc_average(mesh, ell), E, e_L)
         hit, e_bp, elem, e_max = lim.crossing, lim.e_breakpoints, lim.critical_element, \
@@ -106,6 +112,43 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
         return PadLimit(curve.sigma_end, ell, elem, e_bp, e_max)
     delta = float(hit.interpolate(path.delta))
     return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell, elem, e_bp, e_max)
+
+
+#: Largest memory (bytes) of the breakpoints' loads, displacements and strains that
+#: :func:`pad_elastic_limit` holds at once: a longer path is taken in groups of
+#: breakpoints (the maxima of each), then the crossing piece alone (issue 25: a path of
+#: hundreds of breakpoints on a 50 000-node mesh held gigabytes).
+BREAKPOINT_CHUNK_BYTES = PADS_LIMIT_CHUNK_BYTES
+
+
+def _breakpoint_strains(solver: PadContact, curve: GraspCurve, idx) -> np.ndarray:
+    """Element strains ``(len(idx), m, 3)`` at the path's breakpoints ``idx``."""
+    F = np.column_stack([solver.load_vector(curve, curve.path.lam[i]) for i in idx])
+    return solver.element_strains(solver.displacement(F))
+
+
+def _limit_in_chunks(solver: PadContact, curve: GraspCurve, e_L: float, ell: float,
+                     per: int) -> PadLimit:
+    """:func:`pad_elastic_limit` by the one rule with bounded memory, the same numbers:
+    the breakpoints' maxima in groups of ``per`` (each field's maximum is its own), then
+    the rule on the crossing piece alone — the first piece whose end reaches ``e_L`` (the
+    measure is convex along a piece), or the last breakpoint."""
+    path, k = curve.path, len(curve.path.lam)
+    disc = disc_average(solver.mesh, ell)
+    parts = [disc.maxima(_breakpoint_strains(solver, curve, range(a, min(a + per, k))))
+             for a in range(0, k, per)]
+    e_bp = np.concatenate([v for v, _ in parts])
+    above = np.flatnonzero(e_bp >= e_L)
+    j = int(above[0]) if len(above) else k - 1
+    lo = max(j - 1, 0) if len(above) else max(k - 2, 0)
+    lim = path_elastic_limit(disc, _breakpoint_strains(solver, curve, range(lo, j + 1)), e_L)
+    i0, i1 = lim.crossing.piece
+    hit = replace(lim.crossing, piece=(i0 + lo, i1 + lo))
+    if not hit.reached:
+        return PadLimit(curve.sigma_end, ell, lim.critical_element, e_bp, lim.element_max)
+    delta = float(hit.interpolate(path.delta))
+    return PadLimit(max(float(curve.sigma_at(delta)), 0.0), ell, lim.critical_element, e_bp,
+                    lim.element_max)
 
 
 def pad_strain_at(solver: PadContact, curve: GraspCurve, sigma: float,

@@ -381,7 +381,8 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
              max_seconds: float, twin: bool, expanding_from, progress, max_area,
              options: dict) -> RefinedPadGrasp:
     """Levels until the estimates of Q* and U_A are within ``rtol`` (module docstring)."""
-    from .size_limits import check_pads_size
+    from ..limits import holding, kept_bytes
+    from .size_limits import WITH_TWIN, check_pads_size, search_axes
 
     t_start = time.perf_counter()
     base = float(max_area) if max_area is not None else default_max_area(part)
@@ -393,13 +394,18 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
     sizing = first_sizing(part, axis, pad, base, hole_ring) if adaptive else Sizing(base)
     levels, areas, seconds, saddles = [], [], [], []
     stopped = None
+    held = 0.0          # the solvers and curves of the levels so far, which the run keeps
+    n_axes = search_axes(options.get("n_angles", 48), options.get("n_offsets", 50))
     for k in range(MAX_LEVELS):
         if progress is not None:
             progress(k, MAX_LEVELS)
         t0 = time.perf_counter()
         try:
             mesh = mesh_part(part, max_area=sizing.default, sizing=sizing)
-            check_pads_size(mesh, solvers=2 if twin else 1, refine=1)
+            with holding(held):
+                est = check_pads_size(mesh, solvers=WITH_TWIN if twin else 1, refine=1,
+                                      n_axes=n_axes)
+            held += kept_bytes(est)
         except DeformClosureError as err:
             if not levels:
                 raise

@@ -10,13 +10,27 @@ material's critical distance
 
 from __future__ import annotations
 
+import math
 from numbers import Integral
 
 from ..elasticity.critical_distance import critical_distance_of
 from ..errors import GraspError
-from ..limits import MAX_TRIANGLES, check_plan_size, format_count
+from ..mesh.generate import TWIN_AREA
+from ..limits import MAX_TRIANGLES, PADS_SEARCH_AXES_FRACTION, check_plan_size, format_count
 
-__all__ = ["check_pads_size"]
+__all__ = ["check_pads_size", "search_axes", "WITH_TWIN"]
+
+#: Solvers held by an analysis with its noise-floor twin, for :func:`check_pads_size`:
+#: the twin's mesh has ``1 / TWIN_AREA`` of the nodes (its triangles are larger), so the
+#: pair costs ``1 + 1 / TWIN_AREA`` solvers of the main mesh.
+WITH_TWIN = 1.0 + 1.0 / TWIN_AREA
+
+
+def search_axes(n_angles: int, n_offsets: int) -> int:
+    """Grasp axes whose curves one ``optimize`` level keeps, for its memory estimate: the
+    measured share :data:`~deformclosure.limits.PADS_SEARCH_AXES_FRACTION` of its grid
+    (the release search stops at the escape; a plan solves the whole grid)."""
+    return math.ceil(PADS_SEARCH_AXES_FRACTION * int(n_angles) * int(n_offsets))
 
 
 def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
@@ -28,8 +42,10 @@ def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
     mesh : Mesh
         Its boundary ``loops``, ``n_nodes``, ``n_triangles``, element ``areas`` (m²),
         ``diameter`` and ``material`` are read.
-    solvers : int
-        Factorised meshes held at once (2 with the noise-floor twin; ``check`` holds 3).
+    solvers : float
+        Factorised meshes held at once, in solvers of ``mesh`` (:data:`WITH_TWIN` with the
+        noise-floor twin, also for ``check``: its rigid test's solver is released before
+        the landscape's and the twin's are made).
     refine : int
         ``--refine N`` (1..5): the finest of N meshes has about 4^(N−1) times the
         triangles and 2^(N−1) times the boundary nodes.

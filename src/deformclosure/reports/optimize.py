@@ -61,13 +61,13 @@ def _axis_start(at, axis, scale: float):
 
 def _pads(part, p: dict, notify) -> Report:
     from ..pads import pad_grasp
-    from ..pads.size_limits import check_pads_size
+    from ..pads.size_limits import WITH_TWIN, check_pads_size, search_axes
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     rtol, refine, warnings = accuracy_request(p, inp.part is None)
-    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2, refine=refine or 1,
-                    n_axes=p["grid_angles"] * p["grid_offsets"])
+    check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN, refine=refine or 1,
+                    n_axes=search_axes(p["grid_angles"], p["grid_offsets"]))
     scale = inp.scale
     ax = parse_axis(p["at"], p["axis"], scale)
     pad = pad_from_options(p["pad_radius"], p["pad_width"], scale, inp.mesh.diameter)

@@ -43,19 +43,33 @@ def _pads(part, p: dict, progress) -> Report:
     from ..pads import PadContact
     from ..mesh.generate import twin_mesh
     from ..planning.pads import plan_pads
-    from ..pads.size_limits import check_pads_size
+    from ..limits import holding, kept_bytes
+    from ..pads.size_limits import WITH_TWIN, check_pads_size, search_axes
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], max_area=p["max_area"])
-    check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2,  # before the work
-                    n_axes=p["grid_angles"] * p["grid_offsets"])
+    # before the work: the plan's solvers and the curves of every axis of its grid
+    est = check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN,
+                          n_axes=p["grid_angles"] * p["grid_offsets"])
+    if p["verify"] and inp.part is not None:
+        # the plan keeps its solvers and curves while it verifies: the verification's
+        # first level (optimize's code path on a mesh like the plan's) must fit beside them
+        try:
+            with holding(kept_bytes(est)):
+                check_pads_size(inp.mesh, solvers=WITH_TWIN,   # its grid: twice the angles
+                                n_axes=search_axes(2 * p["grid_angles"], p["grid_offsets"]),
+                                what="plan --verify (beside the plan's solvers and curves)")
+        except GraspError as err:
+            raise GraspError(f"{err}; or screen only (--verify 0)") from None
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
-    res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
-                    top=p["verify"], twin=twin, progress=progress, part=inp.part,
-                    rtol=p["rtol"], max_seconds=p["max_seconds"],
-                    elasticity=p.get("elasticity") or getattr(inp.mesh.material, "model",
-                                                               "linear"))
+    # the verification's later levels count what the plan keeps (limits.holding)
+    with holding(kept_bytes(est)):
+        res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
+                        top=p["verify"], twin=twin, progress=progress, part=inp.part,
+                        rtol=p["rtol"], max_seconds=p["max_seconds"],
+                        elasticity=p.get("elasticity") or getattr(inp.mesh.material, "model",
+                                                                   "linear"))
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)

@@ -1,0 +1,186 @@
+"""Memory estimates against what the analyses really hold (issue 25).
+
+The estimate of a command (:func:`deformclosure.limits.check_plan_size`, recorded where
+the command calls it) is compared with the peak resident memory of a fresh interpreter
+running it (``ru_maxrss`` of the child, read by ``os.wait4``: the kernel's count, not
+the package's), and the bookkeeping of what earlier steps hold is checked on a run.
+``benchmarks/bench_memory.py`` prints the same comparison over a sweep of sizes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from deformclosure import limits
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+CHILD = r"""
+import json, sys
+import deformclosure.pads.size_limits as psl
+from deformclosure import reports
+seen = []
+orig = psl.check_plan_size
+def recorded(*a, **k):
+    est = orig(*a, **k)
+    seen.append(est["total"])
+    return est
+psl.check_plan_size = recorded
+reports.run(sys.argv[1], sys.argv[2], json.loads(sys.argv[3]))
+print("EST", max(seen))
+"""
+
+
+def peak_and_estimate(command: str, part: Path, params: dict) -> tuple[float, float]:
+    proc = subprocess.Popen([sys.executable, "-c", CHILD, command, str(part), json.dumps(params)],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    out = proc.stdout.read().decode(errors="replace")
+    _, status, usage = os.wait4(proc.pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0, out[-2000:]
+    est = float([ln for ln in out.splitlines() if ln.startswith("EST ")][-1].split()[1])
+    return usage.ru_maxrss * 1024.0, est
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command, part, params", [
+    # one mesh and its twin of the notched bar (~2 800 nodes, the pads held in the notches)
+    ("optimize", "notched_bar.json", {"axis": "15,6,90", "pad_radius": 2.0, "refine": 1}),
+    # the README rectangle's fingers, one mesh of ~2 500 nodes
+    ("check", "rectangle.json", {"fingers": str(EXAMPLES / "fingers" / "rectangle.json"),
+                                 "refine": 1, "max_area": 0.077}),
+])
+def test_estimate_bounds_the_peak_within_30_percent(command, part, params):
+    """The estimate is at least the measured peak and at most 1.3 times it."""
+    peak, est = peak_and_estimate(command, EXAMPLES / part, params)
+    assert peak <= est <= 1.3 * peak, (peak / 1e9, est / 1e9)
+
+
+def test_holding_adds_to_every_estimate_and_is_released():
+    args = dict(n_nodes=2000, n_triangles=4000, n_boundary=150)
+    base = limits.estimate_model_bytes("pads", **args)
+    with limits.holding(3e8):
+        with limits.holding(2e8):
+            inner = limits.estimate_model_bytes("pads", **args)
+    assert inner["held"] == 5e8
+    assert inner["total"] == pytest.approx(base["total"] + 5e8, rel=1e-12)
+    with pytest.raises(RuntimeError):
+        with limits.holding(1e9):
+            raise RuntimeError
+    assert limits.estimate_model_bytes("pads", **args) == base
+    assert limits.kept_bytes(base) == pytest.approx(
+        base["mesh"] + base["factorisation"] + base["boundary"] + base["landscape"])
+
+
+def test_holding_refuses_what_would_not_fit_beside_it():
+    args = dict(n_nodes=2000, n_triangles=4000, n_boundary=150)
+    limits.check_plan_size(150, "pads", **{k: v for k, v in args.items() if k != "n_boundary"})
+    with limits.holding(limits.MEMORY_BUDGET):
+        with pytest.raises(limits.GraspError, match="GB"):
+            limits.check_plan_size(150, "pads", n_nodes=2000, n_triangles=4000)
+
+
+def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
+    """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
+    level (their solvers stay in the result), recomputed here from the recorded
+    estimates."""
+    import deformclosure as dc
+    import deformclosure.pads.size_limits as psl
+    from deformclosure.pads import GraspAxis, Pad, pad_grasp
+
+    seen = []
+    orig = psl.check_plan_size
+
+    def recorded(*a, **k):
+        est = orig(*a, **k)
+        seen.append(est)
+        return est
+
+    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
+    res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.01, max_seconds=60,
+                    n_angles=8, n_offsets=10, noise=False)
+    assert len(res.levels) >= 2 and len(seen) >= 2
+    kept = 0.0
+    for est in seen:
+        assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
+        kept += limits.kept_bytes(est)
+
+
+def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):
+    """With the budget just above the screening's estimate, ``plan --verify 1`` is refused
+    before any work (the verification's first level beside the plan's solvers and curves
+    would not fit), and the same plan screens with ``--verify 0``."""
+    import deformclosure.pads.size_limits as psl
+    from deformclosure import reports
+    from deformclosure.errors import GraspError
+
+    seen = []
+    orig = psl.check_plan_size
+
+    def recorded(*a, **k):
+        est = orig(*a, **k)
+        seen.append(est["total"])
+        return est
+
+    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    part = EXAMPLES / "rectangle.json"
+    params = {"pad_radius": 1.0, "grid_angles": 4, "grid_offsets": 6, "verify": 0}
+    monkeypatch.setattr(limits, "MEMORY_BUDGET", 1e12)
+    reports.run("plan", part, {**params, "verify": 1, "max_area": 4.0})
+    screening, verification = seen[0], seen[1]
+    assert verification > screening
+    monkeypatch.setattr(limits, "MEMORY_BUDGET", 0.5 * (screening + verification))
+    with pytest.raises(GraspError, match=r"plan --verify .*--verify 0"):
+        reports.run("plan", part, {**params, "verify": 1, "max_area": 4.0})
+    reports.run("plan", part, {**params, "max_area": 4.0})
+
+
+@pytest.mark.parametrize("e_L", [0.8, 0.05, 1e-12, 50.0])
+def test_elastic_limit_in_chunks_equals_all_breakpoints_at_once(e_L):
+    """``pad_elastic_limit`` with its breakpoints in groups (bounded memory) returns the
+    same σ_L, critical element, breakpoint maxima and element maximum (to 1e-12) as the
+    rule on every breakpoint at once (the implementation before the groups), on axes of
+    the notched bar: limits reached inside a piece, at the first breakpoint, never."""
+    import deformclosure as dc
+    import deformclosure.pads.limit as pl
+    from deformclosure.landscape.limit import path_elastic_limit
+    from deformclosure.pads import GraspAxis, Pad, PadContact
+
+    def reference(solver, curve, e_L):          # the rule on the whole stack, as before
+        ell = pl.critical_distance_of(solver.mesh)
+        F = np.column_stack([solver.load_vector(curve, l) for l in curve.path.lam])
+        E = solver.element_strains(solver.displacement(F))
+        lim = path_elastic_limit(pl.disc_average(solver.mesh, ell), E, e_L)
+        hit = lim.crossing
+        sigma = curve.sigma_end if not hit.reached else \
+            max(float(curve.sigma_at(float(hit.interpolate(curve.path.delta)))), 0.0)
+        return sigma, lim.critical_element, lim.e_breakpoints, lim.element_max
+
+    mesh = dc.mesh_part(dc.notched_part(1.0))
+    pc = PadContact(mesh)
+    checked = 0
+    for x, deg in ((0.015, 90.0), (0.012, 80.0), (0.02, 95.0)):
+        c = pc.curve(GraspAxis.at(np.array([x, 0.006]), np.radians(deg)), Pad(0.0, 0.002), 0.0)
+        if c.path is None or len(c.path.lam) < 4:
+            continue
+        old = pl.BREAKPOINT_CHUNK_BYTES
+        try:
+            pl.BREAKPOINT_CHUNK_BYTES = 1.0                 # groups of 2 breakpoints
+            got = pl.pad_elastic_limit(pc, c, e_L)
+        finally:
+            pl.BREAKPOINT_CHUNK_BYTES = old
+        sigma, elem, e_bp, e_max = reference(pc, c, e_L)
+        # the same to rounding: a solve of fewer load columns rounds in other places
+        assert got.sigma_L == pytest.approx(sigma, rel=1e-12, abs=1e-18)
+        assert got.critical_element == elem
+        np.testing.assert_allclose(got.e_breakpoints, e_bp, rtol=1e-12, atol=1e-18)
+        assert got.element_max_at_limit == pytest.approx(e_max, rel=1e-12, abs=1e-18)
+        checked += 1
+    assert checked >= 2
