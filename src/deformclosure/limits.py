@@ -276,7 +276,6 @@ MAX_SLICE_RESOLUTION = 2_000
 SLICE_JSON_BYTES_PER_VALUE = 60.0
 
 
-<<<<<<< HEAD
 def check_body_size(field: str, value: float, diameter: float, lo: float, *,
                     scale: float = 1.0, units: str = "m", hint: str = "") -> None:
     """Refuse a finger or pad size outside ``lo``..:data:`MAX_BODY_FRACTION` times the
@@ -303,7 +302,8 @@ def check_body_size(field: str, value: float, diameter: float, lo: float, *,
                                  f"{MAX_BODY_FRACTION * D:.3g} {units} ({lo:g} to "
                                  f"{MAX_BODY_FRACTION:g} times the part's diameter, {D:.4g} "
                                  f"{units}){hint}")
-=======
+
+
 # --------------------------------------------------------------------------- threads
 #: BLAS threads of the package's dense steps: the loops over many small problems (one
 #: contact path per grasp axis, the planner's screening, a landscape's placements), the
@@ -360,7 +360,6 @@ def blas_threads() -> Iterator[None]:
             yield
         finally:
             _DEPTH -= 1
->>>>>>> perf
 
 
 def format_count(n: float) -> str:

@@ -38,6 +38,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..elasticity.condense import nested_dissection_order, node_adjacency
+from ..limits import blas_threads
 
 __all__ = ["CapsuleObstacle", "ContactState", "FiniteStrainContact", "SqueezePath",
            "follow_squeeze", "RESIDUAL_TOL"]
@@ -232,6 +233,14 @@ class FiniteStrainContact:
     def solve(self, bodies: Sequence[CapsuleObstacle], u0: np.ndarray | None = None,
               lam0: np.ndarray | None = None, mu0: np.ndarray | None = None,
               force_scale: float | None = None) -> ContactState:
+        """:meth:`_solve` with the BLAS threads capped (``limits.BLAS_THREADS``: SuperLU's
+        dense kernels are small and many)."""
+        with blas_threads():
+            return self._solve(bodies, u0, lam0, mu0, force_scale)
+
+    def _solve(self, bodies: Sequence[CapsuleObstacle], u0: np.ndarray | None = None,
+               lam0: np.ndarray | None = None, mu0: np.ndarray | None = None,
+               force_scale: float | None = None) -> ContactState:
         """Equilibrium with the bodies at their given positions, from ``(u0, lam0, mu0)``.
 
         Parameters

@@ -78,15 +78,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
-<<<<<<< HEAD
     check_finger_sizes(fingers, inp.mesh.diameter)
-    check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")
-=======
     # at most two factorised meshes at once: the release landscape's and its twin's (the
     # rigid test's is released before them; measured, benchmarks/bench_memory.py)
     with holding(PLACEMENT_KERNEL_BYTES):
         check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN, what="check")
->>>>>>> perf
 
     def solve(mesh, part=inp.part):
         # ``part``: the geometry of the twin realisation (noise floor), meshed as finely
