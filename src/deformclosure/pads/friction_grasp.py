@@ -12,8 +12,15 @@ friction, on the *same* axis landscape (the same solver, grid, ``σ_L`` and star
   (:func:`~deformclosure.pads.friction.frictional_grasp` of that vertex's curve; where
   the frictional squeeze of a vertex has no quasi-static solution, or needs more rows
   than the curve holds, its frictionless forces — counted in ``frictionless_vertices``).
+  The frictional squeeze of every axis the search expands costs about 30 ms on a 216-node
+  mesh against 3 ms for its frictionless curve, and a search expands thousands of axes,
+  so by default the search's moves use the frictionless forces and the escape path found
+  at σ* is re-evaluated with the frictional ones (``path_check``: its peak work and
+  relative difference, 1.5 % on the README block); ``forces="frictional"`` runs the whole
+  search on them.
   The vertex energies are the landscape's (frictionless) ones: the frictional squeeze of
-  the start differs from it by about 0.2 % on a block (``docs/friction.md``), and the
+  a block differs from it by 0.2 % in force at a 5 % squeeze and by 4.8 % at 23 %
+  (friction restrains the faces' Poisson expansion, ``docs/friction.md``), and the
   state the part reaches at a *neighbouring* axis is the result of being moved there,
   which the rigid-move model does not follow.
 * **σ\\*** — ``U_A^μ`` is known only by evaluation (a search per σ, not a piecewise
@@ -91,10 +98,11 @@ class FrictionalLevel:
     works : list of float
         Work (J) at each axis of the escape path (``U(v) − U(start)`` + dissipation so far).
     frictionless_vertices : int
-        Expanded axes whose frictional squeeze could not be solved (their frictionless
-        normal forces were used).
+        Axes whose frictional squeeze was asked for but could not be solved (their
+        frictionless normal forces were used).
     expanded : int
-        Axes whose moves dissipated (their forces were asked for).
+        Axes whose frictional squeeze was asked for (the search's expanded axes with
+        ``forces="frictional"``, else the escape path's and the start).
     forces : str
         The normal forces of the search's moves (``"frictionless"`` or ``"frictional"``).
     path_check : dict or None
@@ -236,6 +244,8 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
         escape_path=[grid.axis(v) for v in path], saddle=saddle, escape_vertices=tuple(path),
         n_axes=land.n_evaluated)
     check = _path_check(land, path, sigma_star, mu, frictional_forces, cache) if path else None
+    if check is not None:
+        check["relative"] = (check["work"] - UA) / UA if UA > 0 else None
     fails = sum(1 for _, fc in frictional.values() if fc is None)
     out = FrictionalLevel(new, res, mu, esc.dissipation if path else math.nan,
                           list(esc.works) if path else [], fails, len(frictional), forces,
@@ -346,8 +356,13 @@ class FrictionalGrasp:
         d["U_A_model"] = "release work with dissipation (SPEC §9)"
         d["hold"] = hold_to_dict(fin.hold, fin.hold_error)
         d["dissipation"] = None if not math.isfinite(fin.dissipation) else fin.dissipation
-        d["release_work"] = {"works": fin.works, "frictionless_vertices":
-                             fin.frictionless_vertices, "expanded_vertices": fin.expanded}
+        check = fin.path_check
+        d["release_work"] = {
+            "forces": fin.forces, "works": fin.works,
+            "path_check": None if check is None else
+            {"forces": "frictional", "work": check["work"], "dissipation": check["dissipation"],
+             "relative": check["relative"]},
+            "frictional_axes": fin.expanded, "frictionless_fallback": fin.frictionless_vertices}
         fl = self.frictionless
         d["frictionless"] = {"sigma_star": fl.finest.sigma_star, "quality": fl.finest.quality,
                              "U_A": None if math.isinf(fl.finest.U_A) else fl.finest.U_A,
