@@ -174,28 +174,44 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
     land = Landscape(solver, res.pad, res.grid, res.sigma_L, _hole_of(solver, start_curve))
     s = res.grid.vertex(0, 0)
     land.seed(s, start_curve)
-    frictional: dict[int, tuple] = {}           # id(curve) -> (curve, FrictionalCurve | None)
+    # id(curve) -> (curve, FrictionalCurve or None, index of each row of curve in its rows)
+    frictional: dict[int, tuple] = {}
+    fallback: set[int] = set()
 
-    def frictional_curve(curve) -> FrictionalCurve | None:
+    def frictional_curve(curve) -> tuple:
         key = id(curve)
         got = frictional.get(key)
         if got is None:
+            rows = curve
+            if curve is start_curve:
+                # the start is traced to σ = 0 (full closure, where a stick/slip path
+                # need not exist); the search and the hold need it only down to σ_L
+                rows = solver.curve(curve.axis, curve.pad, res.sigma_L, land.hole)
             try:
-                fc = frictional_grasp(solver, curve, mu)
-                if fc.curve is not curve:      # rows re-taken: they no longer match
-                    fc = None
+                fc = frictional_grasp(solver, rows, mu)
             except GraspError:
                 fc = None
-            got = frictional[key] = (curve, fc)
-        return got[1]
+            at = None
+            if fc is not None:      # its rows may be re-taken (friction.py): match them
+                index = {(int(n), int(q)): i for i, (n, q) in
+                         enumerate(zip(fc.curve.nodes, fc.curve.pad_of))}
+                at = np.array([index.get((int(n), int(q)), -1)
+                               for n, q in zip(curve.nodes, curve.pad_of)], int)
+            got = frictional[key] = (curve, fc, at)
+        return got[1], got[2]
 
     def frictional_forces(curve, sigma: float) -> np.ndarray:
         if is_released(curve, sigma):
             return np.zeros(len(curve.nodes))
-        fc = frictional_curve(curve)
-        if fc is None:
-            return contact_normal_forces(curve, sigma)
-        return fc.forces(sigma)[0]
+        fc, at = frictional_curve(curve)
+        if fc is not None:
+            lam = fc.forces(sigma)[0]
+            out = np.where(at >= 0, lam[np.maximum(at, 0)], 0.0)
+            # a force on a row the curve does not have would be lost: not comparable
+            if out.sum() >= lam.sum() * (1 - 1e-9):
+                return out
+        fallback.add(id(curve))
+        return contact_normal_forces(curve, sigma)
 
     Us = start_curve.energy_at
     U_sL = float(Us(res.sigma_L))
@@ -246,12 +262,12 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
     check = _path_check(land, path, sigma_star, mu, frictional_forces, cache) if path else None
     if check is not None:
         check["relative"] = (check["work"] - UA) / UA if UA > 0 else None
-    fails = sum(1 for _, fc in frictional.values() if fc is None)
+    fails = len(fallback)
     out = FrictionalLevel(new, res, mu, esc.dissipation if path else math.nan,
                           list(esc.works) if path else [], fails, len(frictional), forces,
                           check)
     if hold and sigma_star is not None:
-        fc = frictional_curve(start_curve)
+        fc = frictional_curve(start_curve)[0]
         if fc is None:
             return dataclasses.replace(out, hold_error="the frictional squeeze of the start "
                                        "axis has no quasi-static solution")
