@@ -143,17 +143,18 @@ def friction_lines(data: dict) -> list[str]:
     lines = []
     hold = data.get("hold")
     if hold is not None and hold.get("force") is not None:
-        def show(key: str, fmt) -> str:
+        def show(key: str, unit: str) -> str:
             v, sl = hold[key], hold["slide"][key]
             if None in v:      # unbounded in the linear kinematics: what friction gives
-                return f"{fmt(sl[0])} .. {fmt(sl[1])} until friction is exhausted (wedged: unbounded)"
-            return f"{fmt(v[0])} .. {fmt(v[1])}"
+                return (f"{sl[0]:+.4g} .. {sl[1]:+.4g} {unit} until friction is exhausted "
+                        "(beyond: wedged, no gross slip)")
+            return f"{v[0]:+.4g} .. {v[1]:+.4g} {unit}"
 
         f = hold["force"] if None not in hold["force"] else hold["slide"]["force"]
         least = min(abs(f[0]), abs(f[1]))
         lines.append(f"hold at sigma* (mu = {data['friction']:g}): across the axis "
-                     f"{show('force', lambda x: f'{x:+.4g}')} N (carries {least / G0 * 1e3:.4g} g "
-                     f"against gravity), torque {show('torque', lambda x: f'{x:+.4g}')} N*m")
+                     f"{show('force', 'N')}, i.e. {least / G0 * 1e3:.4g} g against gravity; "
+                     f"torque {show('torque', 'N*m')}")
     elif hold is not None:
         lines.append(f"hold at sigma*: not computed ({hold['reason']})")
     dis = data.get("dissipation")
