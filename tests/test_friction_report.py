@@ -182,14 +182,24 @@ def test_a_convex_block_between_flat_pads_is_held_with_friction_only():
 
 
 @pytest.mark.slow
-def test_a_convex_block_is_held_with_friction_to_rtol():
-    """The same with the default refinement to --rtol (two or more levels)."""
-    rep = reports.run("optimize", "examples/rectangle.json",
-                      {"axis": "6,10,90", "pad_radius": 0.5, "pad_width": 36, "friction": 0.5,
-                       "max_seconds": 300})
+def test_the_readme_block_is_held_with_friction_to_rtol():
+    """The README grasp (4 mm flat faces with 1 mm round ends across the 12 mm width) with
+    the default refinement to --rtol: "not held" without friction, "held" with μ = 0.5
+    (about 30 s). Its round ends wedge the block in the small-displacement kinematics: the
+    hold across the axis is unbounded (``null`` + reason) and the printed force is the
+    friction-exhausted ``slide``, close to ``μ (F_A + F_B)``."""
+    params = {"axis": "6,10,0", "pad_radius": 1, "pad_width": 4}
+    rep = reports.run("optimize", "examples/rectangle.json", {**params, "friction": 0.5})
     d = rep.data
+    assert d["frictionless"]["verdict"] == "not held"
     assert d["verdict"] == "held", (d["error_estimate"], d["quality"], d["noise_floor"])
-    assert len(d["convergence"]) >= 2
+    assert len(d["convergence"]) >= 2 and d["converged"]
+    assert d["hold"]["force"] == [None, None] and d["hold"]["reason"]
+    lo, hi = d["hold"]["slide"]["force"]
+    assert lo < 0 < hi and min(-lo, hi) == pytest.approx(0.5 * 2 * d["force"], rel=0.2)
+    assert "until friction is exhausted" in next(ln for ln in rep.lines
+                                                 if ln.startswith("hold at sigma*"))
+    assert abs(d["release_work"]["path_check"]["relative"]) < 0.05
 
 
 # --------------------------------------------------------------------------- refusals

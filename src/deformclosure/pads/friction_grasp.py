@@ -158,8 +158,9 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
     forces : {"frictionless", "frictional"}
         The normal forces of the moves in the search: the landscape's frictionless ones
         (default: cheap), or each expanded axis' frictional squeeze (about 30 ms per axis
-        on a 216-node mesh, thousands of axes). Either way the escape path found at σ* is
-        re-evaluated with the frictional forces (``path_check``).
+        on a 216-node mesh, thousands of axes). With ``hold`` (or ``"frictional"``) the
+        escape path found at σ* is re-evaluated with the frictional forces
+        (``path_check``).
 
     Returns
     -------
@@ -259,7 +260,10 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
         curve=_sampled_curve(samples, Us, start_curve.axial_force, res.curve),
         escape_path=[grid.axis(v) for v in path], saddle=saddle, escape_vertices=tuple(path),
         n_axes=land.n_evaluated)
-    check = _path_check(land, path, sigma_star, mu, frictional_forces, cache) if path else None
+    # the frictional squeezes of the path's axes cost more than the search on fine
+    # meshes: checked where the hold is asked for (the finest level of a run)
+    check = (_path_check(land, path, sigma_star, mu, frictional_forces, cache)
+             if path and (hold or forces == "frictional") else None)
     if check is not None:
         check["relative"] = (check["work"] - UA) / UA if UA > 0 else None
     fails = len(fallback)

@@ -143,18 +143,22 @@ def friction_lines(data: dict) -> list[str]:
     lines = []
     hold = data.get("hold")
     if hold is not None and hold.get("force") is not None:
+        def pair(v, unit: str) -> str:      # None: no limit that way (JSON has no inf)
+            lo, hi = ("-inf" if v[0] is None else f"{v[0]:+.4g}",
+                      "+inf" if v[1] is None else f"{v[1]:+.4g}")
+            return f"{lo} .. {hi} {unit}"
+
         def show(key: str, unit: str) -> str:
             v, sl = hold[key], hold["slide"][key]
-            if None in v:      # unbounded in the linear kinematics: what friction gives
-                return (f"{sl[0]:+.4g} .. {sl[1]:+.4g} {unit} until friction is exhausted "
-                        "(beyond: wedged, no gross slip)")
-            return f"{v[0]:+.4g} .. {v[1]:+.4g} {unit}"
+            if None in v and None not in sl:   # unbounded in the linear kinematics
+                return f"{pair(sl, unit)} until friction is exhausted (beyond: wedged, no gross slip)"
+            return pair(v, unit) + (" (no gross slip: jammed or seated)" if None in v else "")
 
         f = hold["force"] if None not in hold["force"] else hold["slide"]["force"]
-        least = min(abs(f[0]), abs(f[1]))
+        carries = ("" if None in f else
+                   f", i.e. {min(abs(f[0]), abs(f[1])) / G0 * 1e3:.4g} g against gravity")
         lines.append(f"hold at sigma* (mu = {data['friction']:g}): across the axis "
-                     f"{show('force', 'N')}, i.e. {least / G0 * 1e3:.4g} g against gravity; "
-                     f"torque {show('torque', 'N*m')}")
+                     f"{show('force', 'N')}{carries}; torque {show('torque', 'N*m')}")
     elif hold is not None:
         lines.append(f"hold at sigma*: not computed ({hold['reason']})")
     dis = data.get("dissipation")
