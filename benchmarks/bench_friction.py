@@ -22,13 +22,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: (name, part file, optimize parameters): the README's grasps and a few of the examples.
 GRASPS = [
-    ("rectangle, flat pads 36 mm", "rectangle.json",
-     {"axis": "6,10,90", "pad_radius": 0.5, "pad_width": 36}),
     ("rectangle (README)", "rectangle.json", {"axis": "6,10,0", "pad_radius": 1, "pad_width": 4}),
     ("notched bar (README)", "notched_bar.json", {"at": ("15,0", "15,12"), "pad_radius": 2}),
     ("L-shape, round pads", "l_shape.json", {"axis": "4,10,0", "pad_radius": 1}),
     ("ring, expanding (README)", "ring.json",
      {"at": ("1.5,0", "-1.5,0"), "expanding": True, "pad_radius": 0.3}),
+    ("rectangle, flat pads 36 mm", "rectangle.json",
+     {"axis": "6,10,90", "pad_radius": 0.5, "pad_width": 36}),
 ]
 
 
