@@ -48,7 +48,7 @@ import numpy as np
 
 from ..errors import GraspError
 from ..landscape.optimum import maximise_sampled
-from .friction import FrictionalCurve, frictional_grasp
+from .friction import frictional_grasp
 from .landscape import Landscape
 from .optimize import PadGraspResult
 from .refine import DEFAULT_RTOL, RefinedPadGrasp
