@@ -19,6 +19,19 @@ nothing of parts, so ``part`` can read a drawing wherever it reads a part file).
 
 Every reader takes a path or a :class:`~deformclosure.jsonfile.Source` (a file's name and
 bytes, read once); the file beside the drawing is looked up only for a path.
+
+Hostile drawings (issue 23) are refused on one line before the work they would cause:
+an SVG is first scanned by a bare expat parser (:func:`_svg_prescan`) that refuses XML
+entity declarations (they expand without bound — "billion laughs" — or name files to
+read; no file a drawing names is ever opened), nesting deeper than :data:`MAX_SVG_DEPTH`,
+more than :data:`MAX_ENTITIES` elements once ``<use>`` references are expanded (and
+``<use>`` cycles), more than :data:`MAX_PATH_NUMBERS` numbers of path data or
+:data:`MAX_SUBPATHS` sub-paths, and numbers beyond :data:`MAX_DRAWING_NUMBER`; a DXF
+file's entities are counted from its tags before it is loaded and again as its block
+references are exploded (at most :data:`MAX_BLOCK_DEPTH` deep). Every coordinate must be
+finite and at most :data:`~deformclosure.limits.MAX_COORDINATE` in magnitude, and
+``tolerance`` within :data:`TOLERANCE_RANGE` times the drawing's size, so flattening
+never makes more than :data:`MAX_VERTICES` vertices (counted before they are made).
 """
 
 from __future__ import annotations
@@ -26,6 +39,8 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
@@ -34,9 +49,12 @@ import numpy as np
 
 from .errors import PartError
 from .jsonfile import InputFile, Source, as_source
+from .limits import MAX_COORDINATE
 from .units import LENGTH_UNITS
 
-__all__ = ["DRAWING_SUFFIXES", "Drawing", "read_drawing", "drawing_source", "is_drawing_file",
+__all__ = ["DRAWING_SUFFIXES", "MAX_VERTICES", "MAX_ENTITIES", "MAX_PATH_NUMBERS",
+           "MAX_SUBPATHS", "MAX_SVG_DEPTH", "MAX_BLOCK_DEPTH", "MAX_DRAWING_NUMBER",
+           "TOLERANCE_RANGE", "Drawing", "read_drawing", "drawing_source", "is_drawing_file",
            "material_file_beside", "material_path_beside"]
 
 #: File suffixes read as drawings.
@@ -57,6 +75,36 @@ _CURVES = {"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE
 
 #: Most vertices a flattened drawing may have (beyond it the chord tolerance is too fine).
 MAX_VERTICES = 2_000_000
+
+#: Most curve entities (DXF, after exploding block references) or SVG elements (after
+#: expanding ``<use>``) a drawing may have. Protects the readers' time: ezdxf and
+#: svgelements take about 0.1 ms per entity (measured: 200 000 DXF lines 15 s, 100 000
+#: SVG elements 11 s), and no mesh within ``limits.MAX_TRIANGLES`` has more boundary
+#: vertices than this.
+MAX_ENTITIES = 50_000
+
+#: Most numbers of SVG path data (``d``, ``points``) in a drawing (measured: 200 000
+#: numbers read and flattened in 1.8 s).
+MAX_PATH_NUMBERS = 500_000
+
+#: Most SVG sub-paths (``M`` commands) in a drawing: svgelements is quadratic in them
+#: (20 000 in one path: 0.4 s, 40 000: 1.3 s, a million would take minutes).
+MAX_SUBPATHS = 10_000
+
+#: Deepest nesting of SVG elements (svgelements recurses per level).
+MAX_SVG_DEPTH = 200
+
+#: Deepest nesting of DXF block references (a block that holds itself would never end).
+MAX_BLOCK_DEPTH = 32
+
+#: Largest magnitude of a number in SVG geometry (beyond it svgelements' arc
+#: parameterisation overflows and loops: an arc of radius 1e308 never returned).
+MAX_DRAWING_NUMBER = 1e15
+
+#: ``tolerance`` as a fraction of the drawing's bounding-box diagonal: below 1e-9 the
+#: chords are finer than the coordinates' rounding (and a circle would need billions of
+#: them), above 1 every curve is one chord.
+TOLERANCE_RANGE = (1e-9, 1.0)
 
 
 @dataclass(frozen=True)
@@ -130,7 +178,8 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
     src = drawing_source(path)
     _check_options(units, default_units, tolerance)
     if src.suffix == ".dxf":
-        pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
+        with _quiet_logger("ezdxf"):
+            pieces, unit, scale = _dxf_pieces(src, units, layer, tolerance, default_units)
     elif src.suffix == ".svg":
         pieces, unit, scale = _svg_pieces(src, units, layer, tolerance)
     else:
@@ -141,6 +190,24 @@ def read_drawing(path: InputFile, units: str | None = None, layer: str | None = 
                         f"{where}; draw the part's outline")
     loops = [(pts * scale, label) for pts, label in _chain(pieces, src.name)]
     return _assemble(loops, unit, src.name)
+
+
+@contextmanager
+def _quiet_logger(name: str):
+    """Silence library logger ``name`` while reading, unless the caller configured logging:
+    ezdxf logs damaged structure ("DXF Structure Warning: …") through Python's last-resort
+    handler, which put a second line beside the CLI's one-line error."""
+    import logging
+
+    log = logging.getLogger(name)
+    quiet = not log.hasHandlers() and not log.disabled
+    if quiet:
+        log.disabled = True
+    try:
+        yield
+    finally:
+        if quiet:
+            log.disabled = False
 
 
 def drawing_source(path: InputFile) -> Source:
@@ -172,6 +239,36 @@ def _too_many_vertices(name: str) -> PartError:
                      "give a larger --tolerance")
 
 
+class _TooManyVertices(Exception):
+    """Raised by the flatteners when a curve would exceed :data:`MAX_VERTICES`."""
+
+
+def _too_many_entities(name: str, what: str) -> PartError:
+    return PartError(f"{name}: more than {MAX_ENTITIES:,} {what}; a part's outline needs far "
+                     "fewer (no mesh within the limits has that many boundary vertices): "
+                     "simplify the drawing or choose one --layer")
+
+
+def _check_tolerance(name: str, tolerance: float, diagonal: float) -> None:
+    """Refuse a ``tolerance`` outside :data:`TOLERANCE_RANGE` times ``diagonal`` (both in
+    the drawing's units)."""
+    lo, hi = TOLERANCE_RANGE[0] * diagonal, TOLERANCE_RANGE[1] * diagonal
+    if not lo <= tolerance <= hi:
+        raise PartError(f"--tolerance = {tolerance:g}: give a chord tolerance from {lo:.3g} to "
+                        f"{hi:.3g} in the drawing's units ({TOLERANCE_RANGE[0]:g} to "
+                        f"{TOLERANCE_RANGE[1]:g} times the diagonal of {name}, {diagonal:.4g})")
+
+
+def _check_extent(name: str, what: str, points: np.ndarray) -> None:
+    """Refuse coordinates (drawing units) that are not finite or beyond MAX_COORDINATE."""
+    if points.size and not np.all(np.isfinite(points)):
+        raise PartError(f"{name}: {what} has non-finite coordinates (NaN, inf or an "
+                        "overflow); fix it")
+    if points.size and float(np.max(np.abs(points))) > MAX_COORDINATE:
+        raise PartError(f"{name}: {what} has a coordinate larger than {MAX_COORDINATE:g} in "
+                        "magnitude; check the drawing's scale and --units")
+
+
 # --------------------------------------------------------------------------- DXF
 _BINARY_DXF = b"AutoCAD Binary DXF\r\n\x1a\x00"
 
@@ -189,6 +286,11 @@ def _dxf_document(src: Source):
     data = src.data
     if data.startswith(_BINARY_DXF):
         return DXFDocument.load(binary_tags_loader(data, errors="surrogateescape"))
+    # the entities are counted from the tags (group code 0 starts every structure)
+    # before ezdxf spends ~0.1 ms on each
+    codes = data.splitlines()[0::2]
+    if sum(codes.count(c) for c in (b"0", b" 0", b"  0")) > 2 * MAX_ENTITIES + 20_000:
+        raise _too_many_entities(src.name, "DXF entities")
 
     def text(encoding: str, errors: str) -> io.TextIOWrapper:
         return io.TextIOWrapper(io.BytesIO(data), encoding=encoding, errors=errors)
@@ -206,12 +308,22 @@ def _dxf_pieces(src: Source, units: str | None, layer: str | None, tolerance: fl
     path = src.name
     try:
         doc = _dxf_document(src)
-    except (OSError, ezdxf.DXFError, UnicodeDecodeError, ValueError, LookupError) as err:
-        raise PartError(f"{path}: not a readable DXF file ({_detail(err)})") from None
-    msp = doc.modelspace()
-    entities = []
-    for e in msp:
-        entities.extend(_expand(e))
+    except PartError:
+        raise
+    except Exception as err:  # noqa: BLE001 - ezdxf raises many types (a truncated file: StopIteration)
+        raise PartError(f"{path}: not a readable DXF file ({_detail(err) or type(err).__name__})") from None
+    try:
+        msp = doc.modelspace()
+        entities = []
+        for e in msp:
+            for sub in _expand(e, path):
+                entities.append(sub)
+                if len(entities) > MAX_ENTITIES:
+                    raise _too_many_entities(path, "DXF entities (block references exploded)")
+    except PartError:
+        raise
+    except Exception as err:  # noqa: BLE001 - a damaged block or entity
+        raise PartError(f"{path}: not a readable DXF file ({_detail(err) or type(err).__name__})") from None
     if layer is not None:
         layers = sorted({e.dxf.layer for e in entities})
         entities = [e for e in entities if e.dxf.layer == layer]
@@ -227,11 +339,17 @@ def _dxf_pieces(src: Source, units: str | None, layer: str | None, tolerance: fl
             raise PartError(f"{path}: {kind} #{e.dxf.handle} is not supported; draw the outline "
                             "with lines, arcs, polylines, circles, ellipses or splines")
         curves.append(e)
-    if len(curves) > MAX_VERTICES // 2:
-        raise PartError(f"{path}: {len(curves)} entities, more than {MAX_VERTICES // 2}")
+    for e in curves:
+        _check_extent(path, f"{e.dxftype()} #{e.dxf.handle}", _dxf_defining_points(e))
+        if e.dxftype() in ("ARC", "CIRCLE") and not float(e.dxf.radius) > 0:
+            raise PartError(f"{path}: {e.dxftype()} #{e.dxf.handle} has radius "
+                            f"{float(e.dxf.radius):g}; give a radius > 0 or delete it")
     default = tolerance is None
+    diagonal = _dxf_diagonal(curves)
     if default:
-        tolerance = 1e-3 * _dxf_diagonal(curves)
+        tolerance = 1e-3 * diagonal
+    else:
+        _check_tolerance(path, tolerance, diagonal)
     pieces = []
     total = 0
     for e in curves:
@@ -239,6 +357,8 @@ def _dxf_pieces(src: Source, units: str | None, layer: str | None, tolerance: fl
         try:
             pts, closed = _dxf_flatten(e, min(tolerance, _own_tolerance(e)) if default
                                        else tolerance, 1e-2 if default else math.inf)
+        except _TooManyVertices:
+            raise _too_many_vertices(path) from None
         except Exception as err:  # noqa: BLE001 - ezdxf raises many types for bad geometry
             raise PartError(f"{path}: {name} cannot be flattened ({err}); fix or redraw it") from None
         if e.dxftype() in ("LWPOLYLINE", "POLYLINE") and _dxf_elevated(e):
@@ -283,7 +403,10 @@ def _arc_points(cx: float, cy: float, r: float, a0: float, a1: float, tol: float
     """Points on the arc from angle ``a0`` to ``a1`` (rad, a1 > a0), both ends included,
     with chords whose sagitta ``r (1 − cos(Δ/2))`` is at most ``tol``."""
     step = 2 * math.acos(max(-1.0, 1.0 - tol / r)) if tol < 2 * r else math.pi
-    n = max(1, math.ceil((a1 - a0) / max(step, 1e-9)))
+    n = (a1 - a0) / max(step, 1e-9)
+    if not n <= MAX_VERTICES:          # counted before the points are made (NaN too)
+        raise _TooManyVertices
+    n = max(1, math.ceil(n))
     t = np.linspace(a0, a1, n + 1)
     return np.column_stack([cx + r * np.cos(t), cy + r * np.sin(t)])
 
@@ -331,6 +454,9 @@ def _dxf_flatten(e, tol: float, rel: float = math.inf) -> tuple[np.ndarray, bool
             raise ValueError("only 2-D polylines are supported")
         verts = [(v.dxf.location.x, v.dxf.location.y, v.dxf.bulge) for v in e.vertices]
         closed = bool(e.is_closed)
+    bulges = np.array([v[2] for v in verts], float)
+    if not np.all(np.isfinite(bulges) & (np.abs(bulges) <= MAX_COORDINATE)):
+        raise ValueError(f"a bulge is not finite or larger than {MAX_COORDINATE:g} in magnitude")
     out = []
     n = len(verts)
     for i in range(n if closed else n - 1):
@@ -347,14 +473,19 @@ def _dxf_flatten(e, tol: float, rel: float = math.inf) -> tuple[np.ndarray, bool
     return np.array(out, float), closed
 
 
-def _expand(entity) -> Iterable[Any]:
-    """Block references exploded into their entities (recursively); others as they are.
-    An entity on layer "0" inside a block takes the reference's layer (DXF convention)."""
+def _expand(entity, path: str, depth: int = 0) -> Iterable[Any]:
+    """Block references exploded into their entities (recursively, lazily, at most
+    :data:`MAX_BLOCK_DEPTH` deep); others as they are. An entity on layer "0" inside a
+    block takes the reference's layer (DXF convention)."""
     if entity.dxftype() == "INSERT":
+        if depth >= MAX_BLOCK_DEPTH:
+            raise PartError(f"{path}: block references nest more than {MAX_BLOCK_DEPTH} deep at "
+                            f"INSERT of block {entity.dxf.name!r} (does a block hold itself?); "
+                            "fix the drawing")
         for sub in entity.virtual_entities():
             if sub.dxf.layer == "0":
                 sub.dxf.layer = entity.dxf.layer
-            yield from _expand(sub)
+            yield from _expand(sub, path, depth + 1)
     else:
         yield entity
 
@@ -367,30 +498,35 @@ def _dxf_elevated(e) -> bool:
         return False
 
 
+def _dxf_defining_points(e) -> np.ndarray:
+    """The defining points (k, 2) of a curve entity: end points, centre ± radius, control
+    points (a spline lies in their convex hull), vertices."""
+    kind = e.dxftype()
+    if kind == "LINE":
+        pts = [(e.dxf.start.x, e.dxf.start.y), (e.dxf.end.x, e.dxf.end.y)]
+    elif kind in ("ARC", "CIRCLE"):
+        c, r = e.dxf.center, float(e.dxf.radius)
+        pts = [(c.x - r, c.y - r), (c.x + r, c.y + r)]
+    elif kind == "ELLIPSE":
+        c, a = e.dxf.center, float(e.dxf.major_axis.magnitude)
+        pts = [(c.x - a, c.y - a), (c.x + a, c.y + a)]
+    elif kind == "SPLINE":
+        pts = [(p[0], p[1]) for p in e.control_points] + [(p[0], p[1]) for p in e.fit_points]
+    elif kind == "LWPOLYLINE":
+        pts = [(x, y) for x, y in e.get_points(format="xy")]
+    else:
+        pts = [(v.dxf.location.x, v.dxf.location.y) for v in e.vertices]
+    return np.asarray(pts, float).reshape(-1, 2)
+
+
 def _dxf_diagonal(curves) -> float:
-    """Diagonal of a box holding every curve, from its defining points (end points,
-    centre ± radius, control points — a spline lies in their convex hull): cheap, and
-    never smaller than the drawing's own box."""
-    pts = []
-    for e in curves:
-        kind = e.dxftype()
-        if kind == "LINE":
-            pts += [(e.dxf.start.x, e.dxf.start.y), (e.dxf.end.x, e.dxf.end.y)]
-        elif kind in ("ARC", "CIRCLE"):
-            c, r = e.dxf.center, float(e.dxf.radius)
-            pts += [(c.x - r, c.y - r), (c.x + r, c.y + r)]
-        elif kind == "ELLIPSE":
-            c, a = e.dxf.center, float(e.dxf.major_axis.magnitude)
-            pts += [(c.x - a, c.y - a), (c.x + a, c.y + a)]
-        elif kind == "SPLINE":
-            pts += [(p[0], p[1]) for p in e.control_points] + [(p[0], p[1]) for p in e.fit_points]
-        elif kind == "LWPOLYLINE":
-            pts += [(x, y) for x, y in e.get_points(format="xy")]
-        else:
-            pts += [(v.dxf.location.x, v.dxf.location.y) for v in e.vertices]
-    if not pts:
+    """Diagonal of a box holding every curve, from its defining points: cheap, and never
+    smaller than the drawing's own box."""
+    if not curves:
         return 1.0
-    arr = np.asarray(pts, float)
+    arr = np.concatenate([_dxf_defining_points(e) for e in curves])
+    if not len(arr):
+        return 1.0
     d = float(np.hypot(*np.ptp(arr, axis=0)))
     return d if math.isfinite(d) and d > 0 else 1.0
 
@@ -404,10 +540,27 @@ def _svg_pieces(src: Source, units: str | None, layer: str | None,
     import svgelements as se
 
     path = src.name
+    _svg_prescan(src)
     try:
         svg = se.SVG.parse(io.BytesIO(src.data), reify=True, ppi=96.0)
     except Exception as err:  # noqa: BLE001 - the XML parser and svgelements raise many types
         raise PartError(f"{path}: not a readable SVG file ({_detail(err)})") from None
+    if not isinstance(svg, se.SVG):
+        raise PartError(f"{path}: not an SVG drawing (no <svg> root element in the SVG "
+                        "namespace http://www.w3.org/2000/svg)")
+    try:
+        return _svg_shapes(svg, path, units, layer, tolerance)
+    except (PartError, _TooManyVertices):
+        raise
+    except Exception as err:  # noqa: BLE001 - svgelements on damaged geometry raises many types
+        raise PartError(f"{path}: not a readable SVG file ({_detail(err) or type(err).__name__})") from None
+
+
+def _svg_shapes(svg, path: str, units: str | None, layer: str | None,
+                tolerance: float | None) -> tuple[list[_Piece], str, float]:
+    """The pieces of a parsed SVG (see :func:`_svg_pieces`)."""
+    import svgelements as se
+
     root = svg
     if layer is not None:
         found = svg.get_element_by_id(layer)
@@ -432,17 +585,31 @@ def _svg_pieces(src: Source, units: str | None, layer: str | None,
         polylines.append((name, p))
     if not polylines:
         return [], unit, scale
+    boxes = []
+    for name, p in polylines:
+        box = p.bbox()
+        if box is not None:
+            # in the drawing's units: after transforms, an overflow shows here
+            _check_extent(path, name, np.asarray(box, float) * scale)
+            boxes.append(box)
+    boxes = np.array(boxes, float).reshape(-1, 4)
+    diag = math.hypot(boxes[:, 2].max() - boxes[:, 0].min(),
+                      boxes[:, 3].max() - boxes[:, 1].min()) if len(boxes) else 0.0
+    diag = diag if diag > 0 else 1.0
     if tolerance is None:
-        boxes = np.array([p.bbox() for _, p in polylines if p.bbox() is not None], float)
-        diag = math.hypot(boxes[:, 2].max() - boxes[:, 0].min(), boxes[:, 3].max() - boxes[:, 1].min())
-        tol_px = 1e-3 * (diag if diag > 0 else 1.0)
+        tol_px = 1e-3 * diag
     else:
+        _check_tolerance(path, tolerance, diag * scale)
         tol_px = tolerance / scale
     total = 0
+    budget = [MAX_VERTICES]
     for name, p in polylines:
         for k, sub in enumerate(p.as_subpaths()):
             sub = se.Path(sub)
-            pts, closed = _flatten_svg(sub, tol_px)
+            try:
+                pts, closed = _flatten_svg(sub, tol_px, budget)
+            except _TooManyVertices:
+                raise _too_many_vertices(path) from None
             if len(pts) < 2:
                 continue
             total += len(pts)
@@ -455,6 +622,142 @@ def _svg_pieces(src: Source, units: str | None, layer: str | None,
             pts = pts * np.array([1.0, -1.0])
             pieces.append(_Piece(pts, closed, label))
     return pieces, unit, scale
+
+
+_SVG_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_SVG_NOT_FINITE = re.compile(r"(?i)nan|inf")
+_SVG_PATH_ATTRS = ("d", "points")
+_SVG_NUMERIC_ATTRS = ("x", "y", "x1", "y1", "x2", "y2", "cx", "cy", "r", "rx", "ry", "width",
+                      "height", "transform", "viewBox")
+
+
+class _Refused(Exception):
+    """Raised inside the expat handlers of :func:`_svg_prescan` (a message)."""
+
+
+def _svg_prescan(src: Source) -> None:
+    """Refuse, before svgelements reads it, an SVG whose reading could expand without
+    bound, read a file, or take unbounded time (module docstring).
+
+    A bare expat parser (no ElementTree) sees every declaration: an ``<!ENTITY>`` of any
+    kind is refused (defusedxml's ``forbid_entities`` rule: internal ones nest into
+    "billion laughs", external ones name files or URLs), parameter entities are never
+    parsed and no external DTD or entity is fetched. The elements' ids, ``<use>``
+    references and children give the expanded element count without expanding anything.
+
+    Raises
+    ------
+    PartError
+    """
+    from xml.parsers import expat
+
+    name = src.name
+    parser = expat.ParserCreate()
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    children: list[list[int]] = [[]]        # element 0: the document
+    use: dict[int, str] = {}
+    ids: dict[str, int] = {}
+    stack = [0]
+    counts = {"numbers": 0, "subpaths": 0}
+
+    def entity(ent, is_param, value, base, system_id, public_id, notation):
+        raise _Refused(f"{name}: declares the XML entity {ent!r}; entities are refused (they "
+                       "can expand without bound or name files to read): save the drawing as "
+                       "plain SVG without a DOCTYPE")
+
+    def external(context, base, system_id, public_id):
+        raise _Refused(f"{name}: refers to the external entity {system_id!r}; no file a "
+                       "drawing names is read: save it as plain SVG")
+
+    def start(tag, attrs):
+        if len(stack) > MAX_SVG_DEPTH:
+            raise _Refused(f"{name}: elements nest more than {MAX_SVG_DEPTH} deep; flatten "
+                           "the groups")
+        i = len(children)
+        children.append([])
+        children[stack[-1]].append(i)
+        stack.append(i)
+        if len(children) > MAX_ENTITIES + 1:
+            raise _Refused(_too_many_entities(name, "SVG elements").args[0])
+        if "id" in attrs:
+            ids.setdefault(attrs["id"], i)
+        if tag.rpartition(":")[2] == "use":
+            ref = attrs.get("xlink:href", attrs.get("href", ""))
+            if ref.startswith("#"):
+                use[i] = ref[1:]
+        for key, value in attrs.items():
+            local = key.rpartition(":")[2]
+            if local in _SVG_PATH_ATTRS or local in _SVG_NUMERIC_ATTRS:
+                if _SVG_NOT_FINITE.search(value):
+                    # svgelements skips such a value silently (a NaN viewBox scaled the
+                    # drawing by 96 ppi instead of its width)
+                    raise _Refused(f"{name}: attribute {key!r} of element #{i} <{tag}> is not "
+                                   "a finite number (NaN or inf); fix it")
+                nums = _SVG_NUMBER.findall(value)
+                if local in _SVG_PATH_ATTRS:
+                    counts["numbers"] += len(nums)
+                    if local == "d":
+                        counts["subpaths"] += value.count("M") + value.count("m")
+                    if counts["numbers"] > MAX_PATH_NUMBERS:
+                        raise _Refused(f"{name}: more than {MAX_PATH_NUMBERS:,} numbers of path "
+                                       "data; simplify the drawing")
+                    if counts["subpaths"] > MAX_SUBPATHS:
+                        raise _Refused(f"{name}: more than {MAX_SUBPATHS:,} sub-paths (M "
+                                       "commands); simplify the drawing")
+                if nums and float(np.max(np.abs(np.asarray(nums, float)))) > MAX_DRAWING_NUMBER:
+                    raise _Refused(f"{name}: attribute {key!r} of element #{i} <{tag}> has a "
+                                   f"number larger than {MAX_DRAWING_NUMBER:g} in magnitude; "
+                                   "check the drawing's scale")
+
+    def end(tag):
+        stack.pop()
+
+    parser.EntityDeclHandler = entity
+    parser.ExternalEntityRefHandler = external
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(src.data, True)
+    except _Refused as err:
+        raise PartError(str(err)) from None
+    except (expat.ExpatError, ValueError, OverflowError, LookupError) as err:  # LookupError: an unknown encoding
+        raise PartError(f"{name}: not a readable SVG file ({_detail(err)})") from None
+    _svg_expanded_count(name, children, use, ids)
+
+
+def _svg_expanded_count(name: str, children: list[list[int]], use: dict[int, str],
+                        ids: dict[str, int]) -> int:
+    """Elements of an SVG once every ``<use>`` is replaced by what it references
+    (recursively), without expanding: ``size(e) = 1 + Σ size(child) + size(target)``,
+    memoised over the reference graph (iteratively; a cycle is refused)."""
+    size: dict[int, int] = {}
+    top = MAX_ENTITIES + 1
+
+    def deps(i: int) -> list[int]:
+        t = ids.get(use[i]) if i in use else None
+        return children[i] + ([t] if t is not None else [])
+
+    on_path: set[int] = set()
+    todo: list[tuple[int, bool]] = [(0, False)]
+    while todo:
+        i, done = todo.pop()
+        if done:
+            on_path.discard(i)
+            size[i] = min(top, 1 + sum(size[j] for j in deps(i)))
+            continue
+        if i in size:
+            continue
+        on_path.add(i)
+        todo.append((i, True))
+        for j in deps(i):
+            if j in on_path:
+                raise PartError(f"{name}: <use> of #{use.get(i, '?') if i in use else use.get(j, '?')} "
+                                "refers back to itself; fix the drawing")
+            if j not in size:
+                todo.append((j, False))
+    if size[0] > top - 1:
+        raise _too_many_entities(name, "SVG elements (<use> references expanded)")
+    return size[0]
 
 
 def _svg_mm_per_px(svg) -> float:
@@ -480,8 +783,11 @@ def _svg_px_per_user(svg) -> float:
     return float(svg.width) / float(vb.width) if svg.width else 1.0
 
 
-def _flatten_svg(path, tol: float) -> tuple[np.ndarray, bool]:
-    """Vertices of one SVG sub-path with chords within ``tol`` (px) of the curves."""
+def _flatten_svg(path, tol: float, budget: list[int] | None = None) -> tuple[np.ndarray, bool]:
+    """Vertices of one SVG sub-path with chords within ``tol`` (px) of the curves;
+    ``budget``: ``[points left]``, shared by the sub-paths of a drawing (at most
+    :data:`MAX_VERTICES`; :class:`_TooManyVertices` beyond it)."""
+    budget = [MAX_VERTICES] if budget is None else budget
     import svgelements as se
 
     pts: list[complex] = []
@@ -494,7 +800,7 @@ def _flatten_svg(path, tol: float) -> tuple[np.ndarray, bool]:
         elif isinstance(seg, se.Line):
             pts.append(_z(seg.end))
         else:      # Arc, CubicBezier, QuadraticBezier: adaptive subdivision
-            pts.extend(_subdivide(seg, 0.0, 1.0, _z(seg.start), _z(seg.end), tol, 0))
+            pts.extend(_subdivide(seg, 0.0, 1.0, _z(seg.start), _z(seg.end), tol, 0, budget))
     arr = np.array([[z.real, z.imag] for z in pts], float)
     if len(arr) > 2 and np.allclose(arr[0], arr[-1], rtol=0, atol=tol * 1e-3):
         arr = arr[:-1]
@@ -508,8 +814,12 @@ def _z(point) -> complex:
 
 
 def _subdivide(seg, t0: float, t1: float, p0: complex, p1: complex, tol: float,
-               depth: int) -> list[complex]:
-    """Points (after ``p0``, ending with ``p1``) of ``seg`` on [t0, t1] within ``tol``."""
+               depth: int, budget: list[int]) -> list[complex]:
+    """Points (after ``p0``, ending with ``p1``) of ``seg`` on [t0, t1] within ``tol``;
+    each evaluation of the curve counts against ``budget``."""
+    budget[0] -= 3
+    if budget[0] < 0:
+        raise _TooManyVertices
     tm = 0.5 * (t0 + t1)
     pm = _z(seg.point(tm))
     q1, q3 = _z(seg.point(0.5 * (t0 + tm))), _z(seg.point(0.5 * (tm + t1)))
@@ -523,8 +833,8 @@ def _subdivide(seg, t0: float, t1: float, p0: complex, p1: complex, tol: float,
 
     if depth >= 18 or (depth >= 2 and max(dev(pm), dev(q1), dev(q3)) <= tol):
         return [p1]
-    return (_subdivide(seg, t0, tm, p0, pm, tol, depth + 1)
-            + _subdivide(seg, tm, t1, pm, p1, tol, depth + 1))
+    return (_subdivide(seg, t0, tm, p0, pm, tol, depth + 1, budget)
+            + _subdivide(seg, tm, t1, pm, p1, tol, depth + 1, budget))
 
 
 # --------------------------------------------------------------------------- loops

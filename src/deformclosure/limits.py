@@ -42,6 +42,11 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MEMORY_BUDGET",
+    "MAX_COORDINATE",
+    "MAX_BODY_FRACTION",
+    "MIN_PAD_RADIUS_FRACTION",
+    "MIN_DISC_RADIUS_FRACTION",
+    "check_body_size",
     "MAX_TRIANGLES",
     "MAX_THIN_ELEMENTS",
     "MIN_GAP_FRACTION",
@@ -77,6 +82,27 @@ MEMORY_BUDGET = 4.0 * GB
 #: Resident memory of the interpreter with numpy, scipy, shapely, numba and the package
 #: imported (bytes), measured.
 BASE_BYTES = 0.2 * GB
+
+#: Largest coordinate magnitude accepted in a part file or a drawing (in its units);
+#: beyond it, areas overflow and the geometry checks are meaningless.
+MAX_COORDINATE = 1e12
+
+#: Largest finger or pad size (disc radius, pad radius, pad width) as a multiple of the
+#: part's diameter: beyond it the body is a wall (use a half-plane finger) and its gaps
+#: lose the part's digits to cancellation (``|p − c| − r`` with ``r`` ≫ the part).
+MAX_BODY_FRACTION = 100.0
+
+#: Smallest pad radius as a fraction of the part's diameter: a thousand times the SPEC §3
+#: touching tolerance; below it the pad's round end is a point at every mesh the limits
+#: allow (a 1e-300 mm pad was solved, meaninglessly, as one).
+MIN_PAD_RADIUS_FRACTION = 1e-6
+
+#: Smallest disc-finger radius for ``check`` as a fraction of the part's diameter. The
+#: release landscape's lattice step is at most half the smallest disc radius (so a move
+#: cannot jump over a disc) and at least D/1000 (the finest ``--grid-steps``); a smaller
+#: disc shrinks the step without bound (a 1e-300 mm disc ran past 60 s and 16,300
+#: placements). Use a point finger for a disc smaller than this.
+MIN_DISC_RADIUS_FRACTION = 2e-3
 
 # --------------------------------------------------------------------------- meshing
 #: Largest mesh (triangles) a part may be meshed into. Protects the sparse factorisation
@@ -197,6 +223,34 @@ MAX_SLICE_RESOLUTION = 2_000
 
 #: Peak bytes per image value while a slice is written as JSON (Python lists, text).
 SLICE_JSON_BYTES_PER_VALUE = 60.0
+
+
+def check_body_size(field: str, value: float, diameter: float, lo: float, *,
+                    scale: float = 1.0, units: str = "m", hint: str = "") -> None:
+    """Refuse a finger or pad size outside ``lo``..:data:`MAX_BODY_FRACTION` times the
+    part's ``diameter`` (m); ``value`` in ``units`` of ``scale`` m each (``lo = 0`` admits
+    0). One line naming ``field`` and the range.
+
+    Raises
+    ------
+    DeformClosureError
+
+    Examples
+    --------
+    >>> check_body_size("--pad-radius", 1e-300, 0.02, MIN_PAD_RADIUS_FRACTION, scale=1e-3,
+    ...                 units="mm")                       # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    deformclosure.errors.DeformClosureError: --pad-radius = 1e-300 mm: give a size from 2e-05 to 2e+03 mm ...
+    """
+    v = float(value) * scale
+    if not (math.isfinite(v) and lo * diameter <= v <= MAX_BODY_FRACTION * diameter
+            and (lo > 0 or v >= 0)):
+        D = diameter / scale
+        raise DeformClosureError(f"{field} = {value:g} {units}: give a size from {lo * D:.3g} to "
+                                 f"{MAX_BODY_FRACTION * D:.3g} {units} ({lo:g} to "
+                                 f"{MAX_BODY_FRACTION:g} times the part's diameter, {D:.4g} "
+                                 f"{units}){hint}")
 
 
 def format_count(n: float) -> str:

@@ -35,7 +35,7 @@ from .drawing import (drawing_source, is_drawing_file, material_file_beside,
 from .errors import DeformClosureError, PartError
 from .geometry import point_set_diameter, signed_area, touch_tolerance
 from .jsonfile import InputFile, Source
-from .limits import MAX_TRIANGLES, check_mesh_points, check_ring_gaps, points_within
+from .limits import MAX_COORDINATE, MAX_TRIANGLES, check_mesh_points, check_ring_gaps, points_within
 from .units import length_scale
 
 __all__ = [
@@ -47,11 +47,6 @@ __all__ = [
     "part_from_drawing",
     "MAX_TRIANGLES",
 ]
-
-
-#: Largest coordinate magnitude accepted in a part file (in the file's units); beyond
-#: it, areas overflow and the geometry checks are meaningless.
-MAX_COORDINATE = 1e12
 
 
 # --------------------------------------------------------------------------- schema
@@ -251,8 +246,13 @@ class Material:
         cd = mat.critical_distance
         _check_material(mat.youngs_modulus, mat.poisson_ratio, mat.thickness,
                         mat.elastic_limit_strain, mat.plane, cd, prefix=where, model=mat.model)
-        if not math.isfinite(mat.thickness * scale) or mat.thickness * scale <= 0:
-            raise PartError(f"{where}.thickness = {mat.thickness!r}: out of range in these units")
+        lo, hi = LENGTH_RANGE
+        if not lo <= mat.thickness * scale <= hi:
+            raise PartError(f"{where}.thickness = {mat.thickness!r}: out of range in these units; "
+                            f"give a thickness from {lo:g} m to {hi:g} m")
+        if cd is not None and not cd * scale <= hi:
+            raise PartError(f"{where}.critical_distance = {cd!r}: out of range in these units; "
+                            f"give a length from 0 to {hi:g} m")
         return cls(mat.youngs_modulus, mat.poisson_ratio, mat.thickness * scale,
                    mat.elastic_limit_strain, mat.plane, None if cd is None else cd * scale,
                    mat.model)
@@ -320,6 +320,15 @@ def read_material(source: str | InputFile, units: str = "m", where: str = "--mat
     return Material.from_dict(data, length_scale(unit, f"{where}.units", PartError), where)
 
 
+#: Hard ranges of the material values (SI). Energies are proportional to E × thickness:
+#: outside these they underflow to subnormals or overflow (thickness 1e308 made the
+#: stiffness matrix "singular", E = 1e308 gave infinite energies). The soft ranges of
+#: :meth:`Part.sanity_warnings` (1 kPa..1 TPa) only warn.
+MODULUS_RANGE = (1e-3, 1e15)
+LENGTH_RANGE = (1e-9, 1e6)
+STRAIN_RANGE = (1e-12, 100.0)
+
+
 def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
                     critical_distance: float | None, prefix: str, model: str = "linear") -> None:
     """Refuse material values outside their physical ranges, naming ``prefix.field``."""
@@ -327,11 +336,16 @@ def _check_material(E: float, nu: float, t: float, eL: float, plane: str,
     checks = [
         ("youngs_modulus", E, math.isfinite(E) and E > 0,
          "must be a finite number > 0 in Pa (e.g. 2e6 for soft rubber)"),
+        ("youngs_modulus", E, MODULUS_RANGE[0] <= E <= MODULUS_RANGE[1],
+         f"must be from {MODULUS_RANGE[0]:g} to {MODULUS_RANGE[1]:g} Pa (e.g. 2e6 for soft "
+         "rubber); beyond, the energies underflow or overflow"),
         ("poisson_ratio", nu, math.isfinite(nu) and -1.0 < nu < 0.5,
          "must satisfy -1 < poisson_ratio < 0.5 (0.5 is incompressible; use 0.49)"),
         ("thickness", t, math.isfinite(t) and t > 0, "must be a finite number > 0"),
         ("elastic_limit_strain", eL, math.isfinite(eL) and eL > 0,
          "must be a finite strain > 0 (e.g. 0.8)"),
+        ("elastic_limit_strain", eL, STRAIN_RANGE[0] <= eL <= STRAIN_RANGE[1],
+         f"must be a strain from {STRAIN_RANGE[0]:g} to {STRAIN_RANGE[1]:g} (e.g. 0.8)"),
         ("critical_distance", cd, cd is None or (math.isfinite(cd) and cd >= 0),
          "must be a finite length >= 0 in the part's units (or omit it for 2 % of the "
          "part's diameter)"),

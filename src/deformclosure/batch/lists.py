@@ -24,15 +24,22 @@ _AMBIGUOUS_SUFFIXES = frozenset({".dat", ".xml", ".svg", ".wkt", ".node", ".ele"
 
 
 def _folder_files(folder: Path) -> list[Path]:
+    """The part, mesh and drawing files of ``folder``; a drawing's material file
+    (``<name>.material.json``) travels with its drawing and is no job of its own."""
     import meshio
 
-    suffixes = tuple(sorted(set(meshio.extension_to_filetypes) - _AMBIGUOUS_SUFFIXES)) + (".json",)
+    from ..drawing import DRAWING_SUFFIXES, material_path_beside
+
+    suffixes = (tuple(sorted(set(meshio.extension_to_filetypes) - _AMBIGUOUS_SUFFIXES))
+                + (".json",) + DRAWING_SUFFIXES)
     try:
-        return sorted(f for f in folder.iterdir()
-                      if f.is_file() and not f.name.startswith(".")
-                      and f.name.lower().endswith(suffixes))
+        files = sorted(f for f in folder.iterdir()
+                       if f.is_file() and not f.name.startswith(".")
+                       and f.name.lower().endswith(suffixes))
     except OSError as err:
         raise BatchError(f"{folder}: cannot list the folder ({err.strerror or err})") from None
+    sidecars = {material_path_beside(f) for f in files if f.suffix.lower() in DRAWING_SUFFIXES}
+    return [f for f in files if f not in sidecars]
 
 
 def load_jobs(path: str | os.PathLike, command: str = "plan",
@@ -42,8 +49,9 @@ def load_jobs(path: str | os.PathLike, command: str = "plan",
     Parameters
     ----------
     path : path-like
-        * a folder: one job per part or mesh file in it (``*.json`` and the mesh formats
-          meshio reads; not recursive), each running ``command`` with ``options``;
+        * a folder: one job per part, mesh or drawing file in it (``*.json``, the mesh
+          formats meshio reads, ``.dxf`` and ``.svg`` with their ``<name>.material.json``;
+          not recursive), each running ``command`` with ``options``;
         * a ``.json`` list: ``[{"part": "a.json", "command": "optimize", "options":
           ["--at", "0,10", "12,10"]}, ...]`` (an entry may also be just a path string);
         * a ``.csv`` file with a header ``part,command,options``, options as one

@@ -69,18 +69,25 @@ class Material(Protocol):  # pragma: no cover - a protocol
 
 @dataclass(frozen=True)
 class CapsuleObstacle:
-    """A rigid capsule: the segment ``p → q`` (m) swept by a disc of ``radius`` (m).
+    """A rigid capsule: the segment ``p → q`` (m) swept by a disc of ``radius`` (m) —
+    with ``back``, the finger that carries it: the half-strip of the capsule's width
+    behind the segment (away from the part).
 
-    ``p == q`` is a disc. The signed distance of a point ``x`` is ``|x − c(x)| − radius``
-    with ``c(x)`` the segment's point nearest ``x``; its gradient is the unit vector from
-    ``c(x)`` to ``x`` (the direction of the force the capsule exerts), and its Hessian is
-    ``(I − n nᵀ)/|x − c(x)|`` where ``c(x)`` is an end of the segment and ``0`` along the
-    straight face.
+    ``p == q`` is a disc. The signed distance of a point ``x`` in front of the segment's
+    line (or of a capsule without ``back``) is ``|x − c(x)| − radius`` with ``c(x)`` the
+    segment's point nearest ``x``; its gradient is the unit vector from ``c(x)`` to ``x``
+    (the direction of the force the body exerts) and its Hessian ``(I − n nᵀ)/|x − c(x)|``
+    where ``c(x)`` is an end of the segment, ``0`` along the straight face. Behind the line
+    (``(x − p)·back > 0``) the finger's straight sides are the nearest surface: distance
+    ``|t − L/2| − (L/2 + radius)`` along the segment's direction, no curvature. The two
+    pieces meet tangentially, so the distance is continuously differentiable: a part that
+    wraps around a round fingertip slides onto the finger's flanks, never behind it.
     """
 
     p: tuple[float, float]
     q: tuple[float, float]
     radius: float
+    back: tuple[float, float] | None = None
 
     def distance(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Signed distances (m), unit gradients and Hessians (1/m) at points ``X`` (k, 2).
@@ -109,6 +116,17 @@ class CapsuleObstacle:
         end = (t <= 0.0) | (t >= 1.0) if L2 > 0 else np.ones(len(X), bool)
         k = np.where(end, 1.0 / safe, 0.0)
         H = k[:, None, None] * (np.eye(2)[None] - n[:, :, None] * n[:, None, :])
+        if self.back is not None:
+            b = np.asarray(self.back, float)
+            behind = (X - p) @ b > 0
+            if behind.any():
+                L = math.sqrt(L2)
+                ehat = e / L if L > 0 else np.array([-b[1], b[0]])
+                tl = (X[behind] - p) @ ehat - 0.5 * L
+                side = np.where(tl >= 0, 1.0, -1.0)
+                g[behind] = np.abs(tl) - (0.5 * L + self.radius)
+                n[behind] = side[:, None] * ehat[None, :]
+                H[behind] = 0.0
         return g, n, H
 
 
@@ -186,6 +204,8 @@ class FiniteStrainContact:
         self.G = sp.csr_matrix(np.asarray(gauge, float))
         self.length = float(length)
         self.gap_tol = RESIDUAL_TOL * self.length
+        self.area = float(np.ptp(self.X[:, 0]) * np.ptp(self.X[:, 1])) if len(self.X) else 0.0
+        self._floor: float | None = None
         dofs = np.column_stack([2 * self.node, 2 * self.node + 1]).ravel()
         self._dofs = dofs
         if triangles is not None and len(self.X) > 2:
@@ -238,12 +258,26 @@ class FiniteStrainContact:
         if not math.isfinite(E):                 # an inverted element: no Newton step
             return ContactState(u, lam, mu, math.inf, g, n, math.inf, 0, False)
         c = float(Kt.diagonal().mean())          # N/m: the scale of min(λ, c g)
+        if self._floor is None:
+            # Round-off of the internal force: about eps × (stiffness × element size) per
+            # DOF (the stress of a law like neo-Hookean is a difference of O(μ) terms), so
+            # at strains below ~1e-6 a residual of 1e-10 relative to the forces is below
+            # what the arithmetic resolves; the residual is relative to at least 1e10 ×
+            # that floor.
+            h = math.sqrt(self.area / max(self.n_dofs // 2, 1))
+            self._floor = 100.0 * np.finfo(float).eps * c * h / RESIDUAL_TOL
         res = self._residual(u, lam, mu, grad, g, n, c, force_scale)
         it = 0
         prev_active = None
+        seen: set[bytes] = set()
         best_res, best_it = res, 0
         while it < MAX_NEWTON and it - best_it <= STALL:
             active = (lam - c * g) > 0
+            # An active set met before means the full steps cycle (a row grazing the body
+            # flips in and out): from then on a step must lower the residual.
+            key = np.packbits(active).tobytes()
+            cycling = key in seen
+            seen.add(key)
             if res <= RESIDUAL_TOL and prev_active is not None and np.array_equal(active, prev_active):
                 break
             if res <= RESIDUAL_TOL and it > 0 and self._complementary(lam, g):
@@ -266,7 +300,7 @@ class FiniteStrainContact:
                     gt_ = mat.gradient(ut)
                     gg, nn, HH = self.gaps(ut, bodies)
                     rt = self._residual(ut, lt, mt, gt_, gg, nn, c, force_scale)
-                    limit = NONMONOTONE * res if alpha == 1.0 else res
+                    limit = NONMONOTONE * res if alpha == 1.0 and not cycling else res
                     if rt < limit or alpha < 1e-3 or not np.isfinite(res):
                         accepted = True
                         break
@@ -296,7 +330,7 @@ class FiniteStrainContact:
         scale = force_scale
         if scale is None:
             scale = max(float(np.abs(grad).max(initial=0.0)), float(np.abs(lam).max(initial=0.0)))
-        scale = max(scale, 1e-300)
+        scale = max(scale, self._floor or 0.0, 1e-300)
         ncp = np.minimum(lam, c * g)
         gauge = np.abs(self.G @ u).max(initial=0.0) / self.length
         return float(max(np.abs(r_u).max(initial=0.0) / scale,

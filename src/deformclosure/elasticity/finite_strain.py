@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .critical_distance import PRUNE_MARGIN, disc_average
+from .critical_distance import disc_average
 
 __all__ = ["stretch_magnitudes", "averaged_stretch_maximum"]
 

@@ -314,15 +314,17 @@ def maximise_quality(evaluate: Callable[[float], Any], start_energy: Callable[[f
 
 
 def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_samples: int,
-                     rtol: float, x_tol: float) -> tuple[float, float] | None:
+                     rtol: float, x_tol: float,
+                     bound: Callable[[float], float] | None = None) -> tuple[float, float] | None:
     """``argmax Q`` on ``[lo, hi]`` for a ``Q`` known only by evaluation (SPEC §8: the
     finite-strain energies are smooth between contact events, not piecewise quadratic).
 
     ``n_samples`` evenly spaced values of ``x`` (the ends included) locate the best
-    sample; the bracket of its two neighbours is then halved around the best point (both
-    half-way points evaluated, the best of the three kept) until the bracket is narrower
-    than ``x_tol`` or the best value has moved by less than ``rtol / 4`` (relative)
-    in two successive halvings. Samples
+    sample; the bracket of its two neighbours is then narrowed around the best point (both
+    half-way points evaluated, the best kept, the bracket shrunk to its neighbours) until
+    the bracket is narrower than ``x_tol`` or the steeper slope from the best point to the
+    bracket's ends, times the bracket, is within ``rtol / 4`` of ``Q*`` — a bound on how
+    much higher a peak inside the bracket could be. Samples
     rank by :func:`better` (larger ``Q``, then ``toward`` the upper end, the least
     squeeze).
 
@@ -338,6 +340,10 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
         Relative accuracy of ``Q*`` to locate.
     x_tol : float
         Bracket width (m) at which the search stops regardless.
+    bound : callable, optional
+        A cheap upper bound ``x → B(x) ≥ Q(x)`` (J; e.g. ``U_L`` for ``Q = min(U_A, U_L)``):
+        samples are evaluated in order of decreasing bound, and a sample whose bound cannot
+        beat the best value found is not evaluated (it cannot win).
 
     Returns
     -------
@@ -347,25 +353,43 @@ def maximise_sampled(quality: Callable[[float], float], lo: float, hi: float, n_
     xs = np.linspace(lo, hi, max(int(n_samples), 3))
     best: Candidate | None = None
     k_best = 0
-    for k, x in enumerate(xs):
-        c = Candidate(float(quality(float(x))), float(x), True)
+    order = range(len(xs))
+    bounds = None
+    if bound is not None:
+        bounds = [float(bound(float(x))) for x in xs]
+        order = sorted(order, key=lambda k: -bounds[k])
+    for k in order:
+        x = float(xs[k])
+        if bounds is not None and best is not None and bounds[k] < best.Q:
+            continue
+        c = Candidate(float(quality(x)), x, True)
         if better(c, best):
             best, k_best = c, k
     if best is None or not best.Q > 0:
         return None
     a = float(xs[max(k_best - 1, 0)])
     b = float(xs[min(k_best + 1, len(xs) - 1)])
-    stable = 0
+    Qa = float(quality(a)) if a != best.x else best.Q
+    Qb = float(quality(b)) if b != best.x else best.Q
     while b - a > x_tol:
-        prev = best.Q
+        # Inside [a, b] Q can exceed the best sample by at most the steeper of the two
+        # slopes from it to the bracket's ends times the bracket (a peak, even a kink of
+        # a max-min, is where those slopes change sign): stop when that is within rtol/4.
+        slope = max(abs(best.Q - Qa) / max(best.x - a, 1e-300),
+                    abs(best.Q - Qb) / max(b - best.x, 1e-300))
+        if slope * (b - a) <= 0.25 * rtol * abs(best.Q):
+            break
         for x in (0.5 * (a + best.x), 0.5 * (best.x + b)):
             if a < x < b and x != best.x:
                 c = Candidate(float(quality(x)), x, True)
                 if better(c, best):
+                    if x < best.x:
+                        b, Qb = best.x, best.Q
+                    else:
+                        a, Qa = best.x, best.Q
                     best = c
-        half = 0.25 * (b - a)
-        a, b = max(a, best.x - half), min(b, best.x + half)
-        stable = stable + 1 if abs(best.Q - prev) <= 0.25 * rtol * abs(best.Q) else 0
-        if stable >= 2:
-            break
+                elif x < best.x:
+                    a, Qa = x, c.Q
+                else:
+                    b, Qb = x, c.Q
     return best.Q, best.x

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import DeformClosureError, MeshError, PartError
 from ..jsonfile import InputFile, Source, check_input_file, read_json
+from ..limits import MAX_TRIANGLES
 from ..part import Material
 from ..units import length_scale
 from .core import Mesh
@@ -153,6 +154,16 @@ def _check_boundary_block(mesh: Mesh, b: Any) -> None:
                         "(clockwise, listed once); fix them or omit 'boundary'")
 
 
+def check_mesh_file_size(n_triangles: int, field: str) -> None:
+    """Refuse a mesh file of more than :data:`~deformclosure.limits.MAX_TRIANGLES`
+    triangles before it is validated (validating a million triangles took 14 s, and no
+    analysis may factorise such a mesh)."""
+    if n_triangles > MAX_TRIANGLES:
+        raise MeshError(f"{field}: {n_triangles:,} triangles, more than the limit "
+                        f"{MAX_TRIANGLES:,} (the sparse factorisation of K every analysis "
+                        "starts with); coarsen the mesh")
+
+
 def mesh_from_dict(data: Any) -> Mesh:
     """Validated :class:`Mesh` from the mesh JSON structure (SPEC §5).
 
@@ -176,6 +187,8 @@ def mesh_from_dict(data: Any) -> Mesh:
     ([0.001, 0.001], [0, 1, 2, 3])
     """
     _check_mesh_keys(data)
+    tris_in = data["triangles"]
+    check_mesh_file_size(len(tris_in) if isinstance(tris_in, list) else 0, "triangles")
     scale = length_scale(data["units"], "units", MeshError)
     nodes, tris = _mesh_arrays(data, scale)
     material = None
@@ -296,6 +309,7 @@ def _read_meshio_file(path: InputFile, units: str) -> tuple[Mesh, Material | Non
     pts = np.asarray(m.points, float)
     if pts.shape[1] == 3 and np.any(pts[:, 2] != 0):
         raise MeshError(f"{path}: node z coordinates are not all 0; a planar mesh is required")
+    check_mesh_file_size(sum(len(t) for t in tris), f"{path}: triangles")
     tri = np.concatenate(tris).astype(np.int64)
     if tri.size and (tri.min() < 0 or tri.max() >= len(pts)):
         bad = int(tri.min()) if tri.min() < 0 else int(tri.max())

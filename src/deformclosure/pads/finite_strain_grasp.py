@@ -14,6 +14,7 @@ SPEC §8 reaches ``e_L``; ``σ*`` maximises ``Q = min(U_A, U_L)`` by the sampled
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,8 +25,10 @@ from ..landscape.optimum import maximise_sampled
 from .geometry import GraspAxis, Pad
 from .landscape import Landscape
 from .large_deformation import FiniteStrainCurve, FiniteStrainPads
+from .refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, RefinedPadGrasp
 
 __all__ = ["FiniteStrainResult", "RestrictedGrid", "optimize_finite_strain", "finite_strain_levels",
+           "FiniteStrainRefinement",
            "UPPER_BOUND_NOTE"]
 
 #: σ samples of the first pass of the σ*-search.
@@ -101,6 +104,7 @@ class FiniteStrainResult:
     delta_unreachable: float | None = None
     noise_relative: float = 0.0
     start_curve: FiniteStrainCurve | None = field(default=None, repr=False)
+    stopped: str | None = None
 
     # ----------------------------------------------------------- a level of a refinement
     # The attributes :class:`.refine.RefinedPadGrasp` reads of a level, so that the one
@@ -151,6 +155,9 @@ class FiniteStrainResult:
             out += (f"the finite-strain solver could not squeeze the start axis beyond "
                     f"sigma = {self.sigma0 - self.delta_unreachable:.4g} m (Newton failed "
                     "after every step halving); the curve stops there",)
+        if self.stopped:
+            out += (f"the finite-strain search stopped early ({self.stopped}): sigma* and Q* "
+                    "are the best of the separations evaluated",)
         return out + (UPPER_BOUND_NOTE,)
 
     def state_at(self, sigma: float, label: str):
@@ -241,9 +248,14 @@ def _allowed(grid, start: int, path: list[int]) -> set[int]:
     return out
 
 
+class _OutOfTime(Exception):
+    """The finite-strain search's time budget ran out."""
+
+
 def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
                            rtol: float = 0.05, n_samples: int = N_SAMPLES,
-                           solver: FiniteStrainPads | None = None) -> FiniteStrainResult:
+                           solver: FiniteStrainPads | None = None,
+                           deadline: float | None = None) -> FiniteStrainResult:
     """The finite-strain σ*, Q* of the grasp that ``linear`` solved on ``mesh``.
 
     Parameters
@@ -259,6 +271,9 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
         σ samples of the first pass (≥ 3).
     solver : FiniteStrainPads, optional
         Reuse the finite-strain solver of this mesh.
+    deadline : float, optional
+        ``time.perf_counter()`` value after which no new separation is evaluated: σ* is
+        then the best of those evaluated and the result says ``stopped``.
 
     Returns
     -------
@@ -287,13 +302,24 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
     def evaluate(sig: float) -> float:
         r = evals.get(sig)
         if r is None:
+            if deadline is not None and time.perf_counter() > deadline:
+                raise _OutOfTime
             rel = land.release(s, sig, tau)
             UL = U_sL - start.energy_at(sig)
             r = evals[sig] = (rel, UL, min(rel.U_A, UL))
         return r[2]
 
     # the search stays where the start axis can be squeezed (σ ≥ σ_L)
-    best = maximise_sampled(evaluate, sigma_L, sigma0, n_samples, rtol, 1e-4 * sigma0)
+    def U_L(sig: float) -> float:       # Q ≤ U_L, from the start axis alone
+        return U_sL - start.energy_at(sig)
+
+    stopped = None
+    try:
+        best = maximise_sampled(evaluate, sigma_L, sigma0, n_samples, rtol, 1e-4 * sigma0, U_L)
+    except _OutOfTime:
+        stopped = "time budget"
+        ranked = sorted(((r[2], x) for x, r in evals.items()), reverse=True)
+        best = ranked[0] if ranked and ranked[0][0] > 0 else None
     sigma_star = None if best is None else best[1]
     sig_e = sigma0 if sigma_star is None else sigma_star
     rel, UL, Q = evals[sig_e] if sig_e in evals else (land.release(s, sig_e, tau), 0.0, 0.0)
@@ -314,7 +340,8 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
         U_A=rel.U_A if sigma_star is not None else 0.0,
         U_L=UL if sigma_star is not None else 0.0, force=force, stiffness=stiffness,
         strain_at_sigma_star=strain, escape_path=path, n_axes=land.n_evaluated, curve=curve,
-        delta_unreachable=start.delta_failed, noise_relative=tau, start_curve=start)
+        delta_unreachable=start.delta_failed, noise_relative=tau, start_curve=start,
+        stopped=stopped)
 
 
 def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
@@ -331,7 +358,7 @@ def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
 
 
 def finite_strain_levels(refined, elasticity: str = "neo-hookean", rtol: float | None = None,
-                         last: int = 2):
+                         last: int = 2, max_seconds: float | None = None):
     """The finite-strain twin of a refined linear pad grasp (SPEC §8).
 
     Each of the ``last`` finest levels of ``refined`` (every level when it is a fixed
@@ -350,12 +377,32 @@ def finite_strain_levels(refined, elasticity: str = "neo-hookean", rtol: float |
         Accuracy of the sampled σ*-search; default the refinement's (or 0.05).
     last : int
         Levels re-solved after an ``--rtol`` refinement.
+    max_seconds : float, optional
+        Time budget (s) of the finite-strain stage (default the refinement's budget,
+        :data:`~deformclosure.pads.refine.DEFAULT_MAX_SECONDS`); a level that runs out keeps
+        the best separation evaluated, and the refinement is then not converged.
     """
-    from .refine import DEFAULT_RTOL, RefinedPadGrasp
-
     rt = rtol if rtol is not None else (refined.rtol if refined.rtol is not None else DEFAULT_RTOL)
     levels = refined.levels if refined.rtol is None else refined.levels[-last:]
-    nl = [optimize_finite_strain(r.solver.mesh, r, elasticity=elasticity, rtol=rt) for r in levels]
+    budget = DEFAULT_MAX_SECONDS if max_seconds is None else max_seconds
+    deadline = time.perf_counter() + budget
+    nl, seconds = [], []
+    for r in levels:
+        t0 = time.perf_counter()
+        nl.append(optimize_finite_strain(r.solver.mesh, r, elasticity=elasticity, rtol=rt,
+                                         deadline=deadline))
+        seconds.append(time.perf_counter() - t0)
     k = len(nl)
-    return RefinedPadGrasp(nl, refined.max_areas[-k:], refined.rtol, refined.adaptive,
-                           refined.stopped, refined.seconds[-k:], refined.saddles)
+    stopped = next((f"finite strain: {x.stopped}" for x in nl if x.stopped), refined.stopped)
+    return FiniteStrainRefinement(nl, refined.max_areas[-k:], refined.rtol, refined.adaptive,
+                                  stopped, seconds, refined.saddles)
+
+
+class FiniteStrainRefinement(RefinedPadGrasp):
+    """The finite-strain levels as a :class:`~deformclosure.pads.refine.RefinedPadGrasp`
+    (the same estimate and verdict rules), not converged when a level's search ran out
+    of time."""
+
+    @property
+    def converged(self) -> bool:
+        return super().converged and not any(x.stopped for x in self.levels)

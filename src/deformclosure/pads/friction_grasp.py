@@ -55,7 +55,7 @@ from .refine import DEFAULT_RTOL, RefinedPadGrasp
 from .release_work import (contact_normal_forces, gripper_centre, is_released, move_dissipation,
                            move_slip, release_work, row_tangents)
 
-__all__ = ["check_friction", "FrictionalLevel", "frictional_level", "FrictionalGrasp",
+__all__ = ["check_friction", "check_friction_model", "FrictionalLevel", "frictional_level", "FrictionalGrasp",
            "frictional_refined", "hold_to_dict", "SIGMA_SAMPLES"]
 
 #: σ samples of the sampled σ*-search on ``[σ_L, σ0]`` (then halvings around the best).
@@ -79,6 +79,15 @@ def check_friction(mu: Any) -> float:
         raise GraspError(f"--friction = {mu!r}: give a Coulomb friction coefficient μ >= 0 "
                          "(a finite number, e.g. 0.5; 0 = frictionless)")
     return float(mu)
+
+
+def check_friction_model(mu: float, elasticity: str | None) -> None:
+    """Refuse friction (``mu > 0``) with a material law it is not built on (SPEC §9 is on
+    the linear model; neo-Hookean pads are frictionless, SPEC §8)."""
+    if mu > 0 and elasticity == "neo-hookean":
+        raise GraspError("--friction with --elasticity neo-hookean (or material.model "
+                         "neo-hookean): not yet supported (friction is built on the linear "
+                         "model, SPEC §9); use --friction 0 or --elasticity linear")
 
 
 @dataclass(frozen=True, eq=False)

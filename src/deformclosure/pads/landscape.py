@@ -247,12 +247,19 @@ class Landscape:
         """Number of axes whose contact problem has been solved."""
         return len(self._curves)
 
-    def energy(self, v: int, sigma: float) -> float:
+    def energy(self, v: int, sigma: float, near: int | None = None) -> float:
         """Energy (J) of vertex ``v`` at separation ``sigma`` (m).
 
         Expanding grasps: an axis where the pads do not fit in the hole (or miss its
         centre) is out of reach — the hole's walls stop the pads — so its energy is ``inf``.
+        ``near`` is the vertex the search reached ``v`` from: a curve that is solved
+        iteratively (finite strain, SPEC §8, ``energy_near``) starts from its state there.
         """
+        if near is not None and near in self._curves:
+            c = self.curve(v)
+            warm = getattr(c, "energy_near", None)
+            if warm is not None:
+                return warm(sigma, self._curves[near])
         f = self._energy_at.get(v)
         if f is None:
             c = self.curve(v)
@@ -288,7 +295,7 @@ class Landscape:
 
         def U(v: int, near: int | None = None) -> float:
             if v not in E:
-                E[v] = self.energy(v, sigma)
+                E[v] = self.energy(v, sigma, near)
             return E[v]
 
         Us = U(start)

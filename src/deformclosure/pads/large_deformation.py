@@ -124,11 +124,13 @@ class FiniteStrainCurve:
         a, n = self._a, self._n
         w = 0.5 * pad.width
         out = []
-        for s in (zA - pad.radius, zB + pad.radius):
+        # each pad is carried by its finger: the strip behind it (SPEC §6: the pads come
+        # from outside along the axis), so a part wrapping round a pad meets its flanks
+        for s, back in ((zA - pad.radius, -a), (zB + pad.radius, a)):
             p = o + s * a + (ax.offset - w) * n
             q = o + s * a + (ax.offset + w) * n
             out.append(CapsuleObstacle((float(p[0]), float(p[1])), (float(q[0]), float(q[1])),
-                                       pad.radius))
+                                       pad.radius, (float(back[0]), float(back[1]))))
         return out
 
     # ---------------------------------------------------------------- solving
@@ -142,11 +144,14 @@ class FiniteStrainCurve:
         k = bisect.bisect_left(self._deltas, delta)
         if k < len(self._deltas) and self._deltas[k] == delta:
             return self._states[k]
+        step = STEP_FRACTION * self.touch.sigma0
+        direct = self._direct(k, delta, step)
+        if direct is not None:
+            return direct
         if k > 0:
             start, d_start = self._states[k - 1], self._deltas[k - 1]
         else:
             start, d_start = None, self.delta0
-        step = STEP_FRACTION * self.touch.sigma0
         targets = list(np.arange(d_start + step, delta, step)) + [delta]
         path = follow_squeeze(self.problem, self.bodies_at, targets, start, d_start)
         self.n_solves += path.n_solves
@@ -161,6 +166,52 @@ class FiniteStrainCurve:
                                  else min(self.delta_failed, path.delta_failed))
             return None
         return path.states[-1]
+
+    def energy_near(self, sigma: float, other: "FiniteStrainCurve") -> float:
+        """:meth:`energy_at`, started (when this axis has no state yet) from ``other``'s
+        converged state at the same ``sigma``: a neighbouring axis of the landscape holds
+        the part in nearly the same shape, so one Newton solve replaces the trace from
+        first touch (the trace remains the fallback)."""
+        if self.touch is None or other.touch is None or self._states:
+            return self.energy_at(sigma)
+        d = self.delta(sigma)
+        d_other = other.delta(sigma)
+        if d <= self.delta0 or d_other <= other.delta0:
+            return self.energy_at(sigma)
+        seed = other.state(d_other)
+        if seed is None:
+            return self.energy_at(sigma)
+        trial = self.problem.solve(self.bodies_at(d), seed.u, seed.lam, seed.mu)
+        self.n_solves += 1
+        if trial.converged:
+            self._deltas.append(float(d))
+            self._states.append(trial)
+            return trial.energy
+        return self.energy_at(sigma)
+
+    def _direct(self, k: int, delta: float, step: float) -> ContactState | None:
+        """One Newton solve at ``delta`` from the states beside it (interpolated between the
+        two neighbours, or extrapolated from the two below), when the nearest is within a
+        step; ``None`` (the caller traces instead) when there is none or it fails."""
+        D, S = self._deltas, self._states
+        if k == 0 or delta - D[k - 1] > step:
+            return None
+        lo = S[k - 1]
+        if k < len(D):
+            w = (delta - D[k - 1]) / (D[k] - D[k - 1])
+            u0, l0 = lo.u + w * (S[k].u - lo.u), lo.lam + w * (S[k].lam - lo.lam)
+        elif k >= 2:
+            w = (delta - D[k - 1]) / (D[k - 1] - D[k - 2])
+            u0, l0 = lo.u + w * (lo.u - S[k - 2].u), lo.lam + w * (lo.lam - S[k - 2].lam)
+        else:
+            u0, l0 = lo.u, lo.lam
+        trial = self.problem.solve(self.bodies_at(delta), u0, np.maximum(l0, 0.0), lo.mu)
+        self.n_solves += 1
+        if not trial.converged:
+            return None
+        self._deltas.insert(k, float(delta))
+        self._states.insert(k, trial)
+        return trial
 
     def reachable(self, sigma: float) -> bool:
         """Whether the squeeze at ``sigma`` (m) can be solved."""
@@ -277,30 +328,30 @@ class FiniteStrainPads:
         ell = critical_distance_of(self.mesh) if ell is None else ell
         sigma0 = curve.sigma0
         step = STEP_FRACTION * sigma0
-        lo = curve.delta0
+        tol = rtol * sigma0
+        top = sigma0 * (1 - 1e-9)                  # σ = 0: the pads meet
+        lo, hi = curve.delta0, None
+        # bracket: the first step whose strain reaches e_L, or that cannot be reached
         d = lo
-        while True:
-            d_next = d + step
-            if d_next >= sigma0:
-                d_next = sigma0 * (1 - 1e-9)
-            e = curve.strain(curve.sigma_at(d_next), ell)
-            if not math.isfinite(e):
+        while d < top:
+            d = min(d + step, top)
+            e = curve.strain(curve.sigma_at(d), ell)
+            if not math.isfinite(e) or e >= e_L:
+                hi = d
                 break
-            if e >= e_L:
-                hi = d_next
-                lo = d
-                while hi - lo > rtol * sigma0:
-                    mid = 0.5 * (lo + hi)
-                    em = curve.strain(curve.sigma_at(mid), ell)
-                    if em >= e_L:
-                        hi = mid
-                    else:
-                        lo = mid
-                return FiniteStrainLimit(curve.sigma_at(hi), True, ell)
-            d = d_next
-            if d >= sigma0 * (1 - 1e-6):
-                break
-        # e_L not reached before the squeeze became unreachable (or σ = 0)
-        top = curve.delta_failed
-        d_last = max([x for x in curve._deltas if top is None or x < top], default=curve.delta0)
-        return FiniteStrainLimit(curve.sigma_at(d_last), False, ell)
+            lo = d
+        if hi is None:                             # e_L not reached up to σ = 0
+            return FiniteStrainLimit(curve.sigma_at(lo), False, ell)
+        # bisect: a reachable point below e_L raises lo; one at or above e_L, or one the
+        # solver cannot reach, lowers hi (an unreachable squeeze must not hide a crossing)
+        crossed = math.isfinite(curve.strain(curve.sigma_at(hi), ell))
+        while hi - lo > tol:
+            mid = 0.5 * (lo + hi)
+            em = curve.strain(curve.sigma_at(mid), ell)
+            if math.isfinite(em) and em < e_L:
+                lo = mid
+            else:
+                hi, crossed = mid, math.isfinite(em)
+        if crossed:
+            return FiniteStrainLimit(curve.sigma_at(hi), True, ell)
+        return FiniteStrainLimit(curve.sigma_at(lo), False, ell)

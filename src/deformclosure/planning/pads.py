@@ -100,8 +100,12 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
               top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
               solver: PadContact | None = None, progress=None, part=None,
               rtol: float | None = None, max_seconds: float | None = None,
-              friction: float = 0.0) -> PadPlan:
+              elasticity: str = "linear", friction: float = 0.0) -> PadPlan:
     """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
+
+    With ``elasticity="neo-hookean"`` the verified rows are re-solved at finite strain
+    (SPEC §8, :func:`~deformclosure.pads.finite_strain_grasp.finite_strain_levels`, the
+    code path of ``optimize --elasticity neo-hookean``); screening stays linear.
 
     Parameters
     ----------
@@ -196,7 +200,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         # centroid first (the longest way out for the release work, a heuristic)
         rows.sort(key=lambda r: (-r["quality"], abs(r["offset"])))
     refined = _verify_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets, part,
-                           rtol, max_seconds, friction)
+                           rtol, max_seconds, elasticity, friction)
     # verified rows first (held, then undecided, then not held), then the candidates
     order = {"held": 0, "undecided": 1, "not held": 2, "candidate": 3}
     rows.sort(key=lambda r: (not r["verified"], order[r["verdict"]] if r["verified"] else 0,
@@ -286,11 +290,13 @@ def screened_verdict(quality: float) -> str:
 
 def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
                  n_angles: int, n_offsets: int, part, rtol: float | None,
-                 max_seconds: float | None, friction: float = 0.0) -> list:
+                 max_seconds: float | None, elasticity: str = "linear",
+                 friction: float = 0.0) -> list:
     """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`
     to ``rtol``, grid anchored at each axis, twice the plan's angular resolution), updating
     them in place; stops at the first row that shows no barrier."""
     from ..pads.refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, pad_grasp
+    from ..pads.finite_strain_grasp import finite_strain_levels, optimize_finite_strain
     from ..mesh.generate import default_max_area
 
     from ..pads.friction_grasp import frictional_level, frictional_refined
@@ -310,12 +316,17 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             res = pad_grasp(part, ax, pad, rtol=DEFAULT_RTOL if rtol is None else rtol,
                             max_seconds=left / (len(candidates) - n),
                             max_area=default_max_area(part), **opts)
+            if elasticity == "neo-hookean":
+                res = finite_strain_levels(res, elasticity, rtol)
             if friction > 0:
                 res = frictional_refined(res, friction, hold=False).refined
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
             extra = {"converged": res.converged, "n_levels": len(res.levels)}
         else:
             fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, **opts)
+            if elasticity == "neo-hookean":
+                fine = optimize_finite_strain(mesh, fine, rtol=DEFAULT_RTOL if rtol is None
+                                              else rtol)
             if friction > 0:
                 fine = frictional_level(fine, friction, rtol=rtol).result
             err = {"quality": None, "U_A": None, "sigma_star": None}
@@ -325,5 +336,7 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
         r.update({"sigma_star": fine.sigma_star, "quality": fine.quality, "verdict": verdict,
                   "verified": True, "method": "exact", "lattice_quality": r["quality"],
                   "error_estimate": err, "force": fine.force, **extra})
+        if elasticity != "linear":
+            r["elasticity"] = elasticity
         verified.append(fine)
     return verified

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DeformClosureError
+from ..errors import DeformClosureError, GraspError
 from .base import Report, provenance, write_report
 from .inputs import read_inputs, source_of
 
@@ -26,6 +26,21 @@ def contact_points(part, fingers) -> np.ndarray:
         return pts
     d = shapely.distance(shapely.points(pts), part.polygon.boundary)
     return pts[d <= touch_tolerance(part.diameter)]
+
+
+def check_finger_sizes(fingers, diameter: float) -> None:
+    """Refuse a disc finger whose radius is outside
+    :data:`~deformclosure.limits.MIN_DISC_RADIUS_FRACTION`..``MAX_BODY_FRACTION`` times
+    the part's ``diameter`` (m): the release lattice's step follows the smallest disc
+    (issue 23; a 1e-300 mm disc never finished)."""
+    from ..limits import MIN_DISC_RADIUS_FRACTION, check_body_size
+
+    for i, f in enumerate(fingers):
+        rc = f.round_centre()
+        if rc is not None:
+            check_body_size(f"fingers[{i}].radius", rc[1], diameter, MIN_DISC_RADIUS_FRACTION,
+                            hint="; a smaller finger is a point finger "
+                                 '({"type": "point", "at": [x, y]})')
 
 
 def _check_params(p: dict) -> None:
@@ -59,6 +74,10 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
     p = params
     _check_params(p)
+    if p.get("elasticity") == "neo-hookean":
+        raise GraspError("--elasticity neo-hookean: not supported by check yet (finite strain, "
+                         "SPEC §8, covers pads on a grasp axis: optimize and plan); use "
+                         "--elasticity linear")
     check_accuracy(p.get("rtol"), p.get("max_seconds"))
     check_refine(p.get("refine"))
     fsrc = source_of(p["fingers"], "finger file")
@@ -66,6 +85,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"],
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
+    check_finger_sizes(fingers, inp.mesh.diameter)
     check_pads_size(inp.mesh, solvers=2 if inp.part is None else 3, what="check")
 
     def solve(mesh, part=inp.part):

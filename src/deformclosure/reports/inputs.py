@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import DeformClosureError, GraspError
 from ..jsonfile import Source, as_source
+from ..limits import MIN_PAD_RADIUS_FRACTION, check_body_size
 
 __all__ = ["Inputs", "read_inputs", "read_part", "source_of", "material_of", "parse_xy",
            "pad_from_options", "check_grid", "unit_of"]
@@ -187,11 +188,23 @@ def pad_from_options(radius: float | None, width: float, scale: float, diameter:
     if not (math.isfinite(width) and width >= 0):
         raise DeformClosureError(f"--pad-width = {width!r}: must be a finite length >= 0")
     rho = 0.05 * diameter if radius is None else radius * scale
-    for name, v in (("--pad-radius", rho), ("--pad-width", width * scale)):
-        if v > 100 * diameter:
-            raise DeformClosureError(f"{name} = {v:.3g} m: more than 100 times the part's diameter "
-                                     f"({diameter:.3g} m); check the value and --units")
+    unit = _unit_name(scale)
+    if radius is not None:
+        check_body_size("--pad-radius", radius, diameter, MIN_PAD_RADIUS_FRACTION, scale=scale,
+                        units=unit, hint="; check the value and --units")
+    check_body_size("--pad-width", width, diameter, 0.0, scale=scale, units=unit,
+                    hint="; 0 = a round fingertip")
     return Pad(width * scale, rho)
+
+
+def _unit_name(scale: float) -> str:
+    """The length unit of ``scale`` metres (one of LENGTH_UNITS, else ``× scale m``)."""
+    from ..units import LENGTH_UNITS
+
+    for name, f in LENGTH_UNITS.items():
+        if math.isclose(f, scale, rel_tol=1e-12):
+            return name
+    return f"x {scale:g} m"
 
 
 def check_grid(angles: int, offsets: int) -> None:

@@ -23,11 +23,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         check_field_path(p["export_fields"])
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
     _check_friction_request(p, model)
-    if model == "paper":
-        return _paper(part, p)
     if p.get("elasticity") == "neo-hookean" and model == "paper":
         raise GraspError("--elasticity neo-hookean: only with the pads model (SPEC §8); drop "
                          "--model paper / --jaws")
+    if model == "paper":
+        return _paper(part, p)
     only_for("paper", [("--jaws", p["jaws"] is not None), ("--jaw-width", p["jaw_width"] != 0.0),
                        ("--eps", p["eps"] is not None),
                        ("--export-graph", p["export_graph"] is not None),
@@ -83,12 +83,16 @@ def _pads(part, p: dict, notify) -> Report:
                     progress=progress, expanding_from=start, n_angles=p["grid_angles"],
                     n_offsets=p["grid_offsets"])
     elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    if p["friction"] > 0:
+        from ..pads.friction_grasp import check_friction_model
+
+        check_friction_model(p["friction"], elasticity)
     if elasticity == "neo-hookean":
         from ..pads.finite_strain_grasp import finite_strain_levels
 
         if notify is not None:
             notify("finite strain (neo-Hookean) ...")
-        res = finite_strain_levels(res, "neo-hookean", rtol)
+        res = finite_strain_levels(res, "neo-hookean", rtol, max_seconds=p["max_seconds"])
     fdata, friction_lines = None, []
     if p["friction"] > 0:
         res, fdata, friction_lines = _with_friction(res, p["friction"], notify)
@@ -106,7 +110,7 @@ def _pads(part, p: dict, notify) -> Report:
 
 def _check_friction_request(p: dict, model: str) -> None:
     """``--friction μ``: a finite μ ≥ 0; with μ > 0 only the linear pads model (SPEC §9)."""
-    from ..pads.friction_grasp import check_friction
+    from ..pads.friction_grasp import check_friction, check_friction_model
 
     mu = p["friction"] = check_friction(p.get("friction"))
     if mu == 0.0:
@@ -114,9 +118,7 @@ def _check_friction_request(p: dict, model: str) -> None:
     if model == "paper":
         raise GraspError("--friction: the paper model (SPEC §4) is frictionless; drop "
                          "--model paper / --jaws, or use --friction 0")
-    if p.get("elasticity") == "neo-hookean":
-        raise GraspError("--friction with --elasticity neo-hookean: not yet supported "
-                         "(friction is built on the linear model, SPEC §9); drop one of them")
+    check_friction_model(mu, p.get("elasticity"))
 
 
 def _with_friction(res, mu: float, notify):

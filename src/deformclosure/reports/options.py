@@ -225,6 +225,9 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="Solve N uniform mesh levels instead of refining to --rtol; 1 = one mesh, "
                  "no error estimate."),
         _ACCURACY[1],
+        Opt("elasticity", ("--elasticity",), "choice", choices=MATERIAL_MODELS,
+            help="Material law: linear (SPEC §7); neo-hookean is not supported by check yet "
+                 "(it is by optimize and plan)."),
         _FRICTION,
         _MATERIAL, _UNITS, _MAX_AREA,
         *_DISPLAY,
@@ -261,6 +264,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
                  "the plan's mesh and one with h doubled (error estimate); only a verified "
                  "row can be 'held'."),
         *_ACCURACY[:2],
+        _ELASTICITY,
         _FRICTION,
         Opt("eps", ("--eps",), "float",
             help="paper: every pair's quality within eps of its optimum, in joules."),

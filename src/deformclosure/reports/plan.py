@@ -20,11 +20,12 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         raise GraspError(f"--top = {p['top']}: must be >= 0")
     if p["verify"] < 0:
         raise GraspError(f"--verify = {p['verify']}: must be >= 0 (0: screen only)")
-    from ..pads.friction_grasp import check_friction
+    from ..pads.friction_grasp import check_friction, check_friction_model
     from ..pads.refine import check_accuracy
 
     check_accuracy(p["rtol"], p["max_seconds"])
     p["friction"] = check_friction(p.get("friction"))
+    check_friction_model(p["friction"], p.get("elasticity"))
     if p["model"] == "pads":
         only_for("paper", [("--eps", p["eps"] is not None), ("--expanding", p["expanding"]),
                            ("--jaw-width", p["jaw_width"] != 0.0),
@@ -53,10 +54,15 @@ def _pads(part, p: dict, progress) -> Report:
     check_pads_size(inp.mesh, solvers=1 if inp.part is None else 2,  # before the work
                     n_axes=p["grid_angles"] * p["grid_offsets"])
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
+    from ..pads.friction_grasp import check_friction_model
+
+    elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    check_friction_model(p["friction"], elasticity)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
                     top=p["verify"], twin=twin, progress=progress, part=inp.part,
-                    rtol=p["rtol"], max_seconds=p["max_seconds"], friction=p["friction"])
+                    rtol=p["rtol"], max_seconds=p["max_seconds"], friction=p["friction"],
+                    elasticity=elasticity)
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)
