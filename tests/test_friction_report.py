@@ -233,3 +233,17 @@ def test_friction_is_refused_where_it_is_not_built(tmp_path):
                     {"model": "paper", "at": ("0,10", "12,10"), "friction": 0.5})
     with pytest.raises(GraspError, match="--friction"):
         reports.run("plan", "examples/rectangle.json", {"model": "paper", "friction": 0.5})
+
+
+@pytest.mark.slow
+def test_plan_with_friction_verifies_by_optimizes_code_path():
+    """plan --friction: the best verified row (the block's axis through its centre, the
+    README's pads) is held with friction, none without (about 30 s)."""
+    params = {"pad_radius": 1, "pad_width": 4, "verify": 1, "grid_angles": 8,
+              "grid_offsets": 10, "max_seconds": 60}
+    rep = reports.run("plan", "examples/rectangle.json", {**params, "friction": 0.5})
+    best = rep.data["axes"][0]
+    assert rep.data["friction"] == 0.5 and best["verified"] and best["verdict"] == "held"
+    assert rep.data["top"] and best["U_A"] >= best["quality"] > 0
+    plain = reports.run("plan", "examples/rectangle.json", {**params, "verify": 1})
+    assert "friction" not in plain.data and not plain.data["top"]
