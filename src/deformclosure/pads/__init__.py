@@ -7,7 +7,8 @@ traced exactly in σ by :func:`deformclosure.contact.solve.trace_contact`) → :
 squeeze and the holding force and torque, SPEC §9) →
 :mod:`.landscape` (release over axes; with friction, the moves' dissipation and the
 release work of :mod:`.release_work`, SPEC §9) and :mod:`.noise` (what the mesh resolves) →
-:mod:`.optimize` (σ*) → :mod:`.refine` (convergence, error, verdict). At finite strain
+:mod:`.optimize` (σ*) → :mod:`.refine` (convergence, error, verdict) → with friction
+:mod:`.friction_grasp` (every level read with ``Q = min(U_A^μ, U_L)``, the hold at σ*). At finite strain
 (SPEC §8) :mod:`.large_deformation` (exact-gap curves of a neo-Hookean part) and
 :mod:`.finite_strain_grasp` (σ*, Q* on the linear escape path's sub-landscape). The planner over
 grasp axes is :mod:`deformclosure.planning.pads`.

@@ -179,7 +179,8 @@ def is_released(curve: GraspCurve, sigma: float) -> bool:
 def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
                  normal_forces: Callable[[GraspCurve, float], np.ndarray] | None = None,
                  stop_above: float | None = None,
-                 max_evaluations: int | None = None) -> DissipativeEscape:
+                 max_evaluations: int | None = None,
+                 cache: dict | None = None) -> DissipativeEscape:
     """Release work ``U_A^μ`` (J) from axis ``start`` at separation ``sigma`` (SPEC §9).
 
     The least, over paths on the landscape's grid to an axis where no pad presses
@@ -202,6 +203,10 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
         ``curve`` at ``sigma``; default :func:`contact_normal_forces` (frictionless).
     stop_above, max_evaluations : optional
         As in :func:`~deformclosure.landscape.search.dissipative_escape`.
+    cache : dict, optional
+        Keeps what does not depend on σ between calls on one landscape (a σ*-search asks
+        many σ): each vertex's rows and centre, and each move's slips (the rows of a curve
+        and the rigid move are the same at every σ; only the forces change).
 
     Returns
     -------
@@ -217,28 +222,33 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
         raise GraspError(f"friction = {mu!r}: give a friction coefficient μ ≥ 0")
     forces_of = contact_normal_forces if normal_forces is None else normal_forces
     nodes = landscape.solver.mesh.nodes
-    rows: dict[int, tuple] = {}
+    forces: dict[int, np.ndarray] = {}
+    store = {} if cache is None else cache
+    geometry = store.setdefault("rows", {})       # v -> (points, tangents, centre)
+    slips = store.setdefault("slips", {})         # (v, w) -> slip of every row of v
 
-    def moving_rows(v: int) -> tuple:
-        """Points, tangents and forces of the rows of ``v`` that press, and its centre."""
-        out = rows.get(v)
+    def rows_of(v: int) -> tuple:
+        """Points and tangents of every candidate row of ``v``, and its centre."""
+        out = geometry.get(v)
         if out is None:
             c = landscape.curve(v)
-            f = np.asarray(forces_of(c, sigma), float)
-            on = f != 0.0
-            out = rows[v] = (nodes[c.nodes[on]], row_tangents(c.normals[on]), f[on],
-                             gripper_centre(c))
+            out = geometry[v] = (nodes[c.nodes], row_tangents(c.normals), gripper_centre(c))
         return out
 
     def dissipation(v: int, w: int) -> float:
         if mu == 0.0:
             return 0.0
-        P, T, f, Cv = moving_rows(v)
-        if len(f) == 0:
+        f = forces.get(v)
+        if f is None:
+            f = forces[v] = np.asarray(forces_of(landscape.curve(v), sigma), float)
+        if not f.any():
             return 0.0
-        grid = landscape.grid
-        slip = move_slip(P, T, grid.axis(v), Cv, grid.axis(w),
-                         gripper_centre(landscape.curve(w)))
+        slip = slips.get((v, w))
+        if slip is None:
+            P, T, Cv = rows_of(v)
+            grid = landscape.grid
+            slip = slips[v, w] = move_slip(P, T, grid.axis(v), Cv, grid.axis(w),
+                                           gripper_centre(landscape.curve(w)))
         return move_dissipation(mu, f, slip)
 
     return dissipative_escape(start, landscape.neighbours,

@@ -64,6 +64,7 @@ class PadPlan:
     n_sigma: int
     noise_relative: float
     top: list = field(default_factory=list)
+    friction: float = 0.0
 
     @property
     def held(self) -> list[dict]:
@@ -72,8 +73,9 @@ class PadPlan:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready report (SI): ``axes`` (every row, verified first) and ``top`` (the
-        verified rows that are held; empty when none is)."""
-        return {"model": "pads", "pad": self.pad.to_dict(),
+        verified rows that are held; empty when none is); ``friction`` (μ) when ``μ > 0``."""
+        extra = {"friction": self.friction} if self.friction > 0 else {}
+        return {"model": "pads", "pad": self.pad.to_dict(), **extra,
                 "grid": {"n_angles": self.grid.n_angles, "n_offsets": self.grid.n_offsets,
                          "d_angle": self.grid.d_angle, "d_offset": self.grid.d_offset,
                          "origin": list(self.grid.origin)},
@@ -99,7 +101,7 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
               top: int = 5, twin: PadContact | None = None, noise_samples: int = 48,
               solver: PadContact | None = None, progress=None, part=None,
               rtol: float | None = None, max_seconds: float | None = None,
-              elasticity: str = "linear") -> PadPlan:
+              elasticity: str = "linear", friction: float = 0.0) -> PadPlan:
     """Rank every grasp axis of a part for pads ``pad`` (contracting grasps).
 
     With ``elasticity="neo-hookean"`` the verified rows are re-solved at finite strain
@@ -140,6 +142,13 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         Relative accuracy of each verified candidate (default 0.05).
     max_seconds : float, optional
         Time budget (s) of all verifications together (default 120), shared equally.
+    friction : float
+        Coulomb coefficient μ (SPEC §9). With ``μ > 0`` the screening stays frictionless
+        (it ranks the lattice's ``Q``; rows of equal ``Q`` by ``|offset|``, the axes
+        through the centroid first), the best ``top`` screened rows are verified even
+        without a frictionless barrier, and each verified row carries ``Q = min(U_A^μ,
+        U_L)`` from optimize's code path
+        (:func:`~deformclosure.pads.friction_grasp.frictional_refined`).
 
     Returns
     -------
@@ -197,15 +206,19 @@ def _plan(mesh, pad: Pad, solver: PadContact, grid: AxisGrid, e_L: float, n_sigm
     rows = [_lattice_row(v, grid.axis(v), c, solver, lattice, E[v], UA[v], e_L)
             for v, c in enumerate(curves) if c.touch is not None]
     rows.sort(key=lambda r: -r["quality"])
+    if friction > 0:
+        # no friction screening yet: among equal screened Q the axes nearest the area
+        # centroid first (the longest way out for the release work, a heuristic)
+        rows.sort(key=lambda r: (-r["quality"], abs(r["offset"])))
     refined = _verify_best(rows[:top], mesh, pad, solver, twin, n_angles, n_offsets, part,
-                           rtol, max_seconds, elasticity)
+                           rtol, max_seconds, elasticity, friction)
     # verified rows first (held, then undecided, then not held), then the candidates
     order = {"held": 0, "undecided": 1, "not held": 2, "candidate": 3}
     rows.sort(key=lambda r: (not r["verified"], order[r["verdict"]] if r["verified"] else 0,
                              -r["quality"]))
     for r in rows:
         r.pop("vertex")
-    return PadPlan(rows, pad, grid, n_sigma, float(np.max(tau)), refined)
+    return PadPlan(rows, pad, grid, n_sigma, float(np.max(tau)), refined, friction)
 
 
 def _solve_axes(solver: PadContact, grid: AxisGrid, pad: Pad, e_L: float,
@@ -288,7 +301,8 @@ def screened_verdict(quality: float) -> str:
 
 def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: PadContact | None,
                  n_angles: int, n_offsets: int, part, rtol: float | None,
-                 max_seconds: float | None, elasticity: str = "linear") -> list:
+                 max_seconds: float | None, elasticity: str = "linear",
+                 friction: float = 0.0) -> list:
     """Verify the best candidates with the code path of ``optimize`` (:func:`pad_grasp`
     to ``rtol``, grid anchored at each axis, twice the plan's angular resolution), updating
     them in place; stops at the first row that shows no barrier."""
@@ -296,8 +310,11 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
     from ..pads.finite_strain_grasp import finite_strain_levels, optimize_finite_strain
     from ..mesh.generate import default_max_area
 
+    from ..pads.friction_grasp import frictional_level, frictional_refined
+
     first_gap = next((k for k, r in enumerate(rows) if r["quality"] <= 0), len(rows))
-    candidates = rows[:first_gap]
+    # with friction a row without a frictionless barrier may hold: verify it too
+    candidates = rows if friction > 0 else rows[:first_gap]
     total = DEFAULT_MAX_SECONDS if max_seconds is None else max_seconds
     t_start = time.perf_counter()
     opts = dict(n_angles=2 * n_angles, n_offsets=n_offsets)
@@ -312,6 +329,8 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
                             max_area=default_max_area(part), **opts)
             if elasticity == "neo-hookean":
                 res = finite_strain_levels(res, elasticity, rtol)
+            if friction > 0:
+                res = frictional_refined(res, friction, hold=False).refined
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
             extra = {"converged": res.converged, "n_levels": len(res.levels)}
         else:
@@ -319,8 +338,12 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             if elasticity == "neo-hookean":
                 fine = optimize_finite_strain(mesh, fine, rtol=DEFAULT_RTOL if rtol is None
                                               else rtol)
+            if friction > 0:
+                fine = frictional_level(fine, friction, rtol=rtol).result
             err = {"quality": None, "U_A": None, "sigma_star": None}
             verdict, extra = fine.verdict, {"converged": False, "n_levels": 1}
+        if friction > 0:
+            extra["U_A"] = None if np.isinf(fine.U_A) else fine.U_A
         r.update({"sigma_star": fine.sigma_star, "quality": fine.quality, "verdict": verdict,
                   "verified": True, "method": "exact", "lattice_quality": r["quality"],
                   "error_estimate": err, "force": fine.force, **extra})

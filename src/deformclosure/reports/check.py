@@ -53,6 +53,14 @@ def _check_params(p: dict) -> None:
     if not (0 <= p["saddle_levels"] <= 4):
         raise DeformClosureError(f"--saddle-levels = {p['saddle_levels']}: give a whole number "
                                  "from 0 to 4")
+    from ..pads.friction_grasp import check_friction
+
+    if check_friction(p.get("friction")) > 0:
+        # SPEC §9 on the §7 placement landscape (slip of each finger contact per placement
+        # move, the fingers' frictional holding loads) is not built yet
+        raise DeformClosureError("--friction: not yet supported for check (its placement "
+                                 "landscape, SPEC §7, is frictionless); use --friction 0, or "
+                                 "optimize/plan with pads for friction (SPEC §9)")
 
 
 def run(part, params: dict, progress=None, notify=None) -> Report:

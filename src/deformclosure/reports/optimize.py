@@ -22,6 +22,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     if p["export_fields"] is not None:
         check_field_path(p["export_fields"])
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
+    _check_friction_request(p, model)
     if p.get("elasticity") == "neo-hookean" and model == "paper":
         raise GraspError("--elasticity neo-hookean: only with the pads model (SPEC §8); drop "
                          "--model paper / --jaws")
@@ -82,18 +83,94 @@ def _pads(part, p: dict, notify) -> Report:
                     progress=progress, expanding_from=start, n_angles=p["grid_angles"],
                     n_offsets=p["grid_offsets"])
     elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    if p["friction"] > 0:
+        from ..pads.friction_grasp import check_friction_model
+
+        check_friction_model(p["friction"], elasticity)
     if elasticity == "neo-hookean":
         from ..pads.finite_strain_grasp import finite_strain_levels
 
         if notify is not None:
             notify("finite strain (neo-Hookean) ...")
         res = finite_strain_levels(res, "neo-hookean", rtol, max_seconds=p["max_seconds"])
-    data = {**res.to_dict(), "provenance": provenance(inp.sources)}
+    fdata, friction_lines = None, []
+    if p["friction"] > 0:
+        res, fdata, friction_lines = _with_friction(res, p["friction"], notify)
+    data = {**(res.to_dict() if fdata is None else fdata), "provenance": provenance(inp.sources)}
     lines = _pads_lines(res, data, pad, inp.unit, scale)
+    lines[-1:-1] = friction_lines
     rep = Report("optimize", data, lines,
                  inp.warnings + warnings + list(res.finest.warnings) + refinement_warnings(res),
                  p, res, _pads_writer(inp))
     return rep
+
+
+# ----------------------------------------------------------------------------- friction
+
+
+def _check_friction_request(p: dict, model: str) -> None:
+    """``--friction μ``: a finite μ ≥ 0; with μ > 0 only the linear pads model (SPEC §9)."""
+    from ..pads.friction_grasp import check_friction, check_friction_model
+
+    mu = p["friction"] = check_friction(p.get("friction"))
+    if mu == 0.0:
+        return
+    if model == "paper":
+        raise GraspError("--friction: the paper model (SPEC §4) is frictionless; drop "
+                         "--model paper / --jaws, or use --friction 0")
+    check_friction_model(mu, p.get("elasticity"))
+
+
+def _with_friction(res, mu: float, notify):
+    """The refined grasp read with friction μ (:mod:`deformclosure.pads.friction_grasp`)
+    and its summary lines (hold at σ*, the release work's dissipation)."""
+    from ..pads.friction_grasp import frictional_refined
+
+    if notify is not None:
+        notify(f"friction mu = {mu:g}: release work with dissipation ...")
+    fr = frictional_refined(res, mu)
+    data = fr.to_dict()
+    return fr.refined, data, friction_lines(data)
+
+
+#: Standard gravity (m/s²), for the hold force as a mass held against gravity.
+G0 = 9.80665
+
+
+def friction_lines(data: dict) -> list[str]:
+    """The printed friction summary: the hold at σ* (the cross-axis force as the mass it
+    carries against gravity; where the small-displacement hold is unbounded — round pads
+    wedge the part, a block jams under torque — the friction-exhausted ``slide`` load is
+    printed and marked so) and the release work's dissipation."""
+    lines = []
+    hold = data.get("hold")
+    if hold is not None and hold.get("force") is not None:
+        def pair(v, unit: str) -> str:      # None: no limit that way (JSON has no inf)
+            lo, hi = ("-inf" if v[0] is None else f"{v[0]:+.4g}",
+                      "+inf" if v[1] is None else f"{v[1]:+.4g}")
+            return f"{lo} .. {hi} {unit}"
+
+        def show(key: str, unit: str) -> str:
+            v, sl = hold[key], hold["slide"][key]
+            if None in v and None not in sl:   # unbounded in the linear kinematics
+                return f"{pair(sl, unit)} until friction is exhausted (beyond: wedged, no gross slip)"
+            return pair(v, unit) + (" (no gross slip: jammed or seated)" if None in v else "")
+
+        f = hold["force"] if None not in hold["force"] else hold["slide"]["force"]
+        carries = ("" if None in f else
+                   f", i.e. {min(abs(f[0]), abs(f[1])) / G0 * 1e3:.4g} g against gravity")
+        lines.append(f"hold at sigma* (mu = {data['friction']:g}): across the axis "
+                     f"{show('force', 'N')}{carries}; torque {show('torque', 'N*m')}")
+    elif hold is not None:
+        lines.append(f"hold at sigma*: not computed ({hold['reason']})")
+    dis = data.get("dissipation")
+    fl = data["frictionless"]
+    lines.append(f"release work with friction: U_A = "
+                 f"{'infinite' if data['U_A_infinite'] else format(data['U_A'], '.6g') + ' J'}"
+                 + ("" if dis is None else f", {dis:.4g} J dissipated along the escape path "
+                    f"({len(data['escape_path'])} axes)")
+                 + f"; frictionless: Q* = {fl['quality']:.4g} J, {fl['verdict']}")
+    return lines
 
 
 def accuracy_request(p: dict, mesh_file: bool) -> tuple[float | None, int | None, list[str]]:

@@ -123,6 +123,10 @@ _ELASTICITY = Opt("elasticity", ("--elasticity",), "choice", choices=MATERIAL_MO
                   help="pads: material law — linear (small strain, SPEC §6) or neo-hookean "
                        "(finite strain with the exact pad contact, SPEC §8); default the "
                        "part's material.model (linear).")
+_FRICTION = Opt("friction", ("--friction",), "float", 0.0, show_default=True,
+                help="Coulomb friction coefficient μ between pads (fingers) and part (SPEC "
+                     "§9); 0 = frictionless (SPEC §6 exactly). pads: Q with the release work "
+                     "U_A^μ and the holding force; not yet supported by check.")
 _UNITS = Opt("units", ("--units",), "str",
              help="Unit of the lengths given here and of a meshio file's coordinates (m, cm, "
                   "mm, in; default: the part file's units, m for mesh files).")
@@ -178,6 +182,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
                  "saddle) instead of refining to --rtol; 1 = one mesh, no error estimate."),
         *_ACCURACY,
         _ELASTICITY,
+        _FRICTION,
         Opt("method", ("--method",), "choice", "exact", choices=METHODS, show_default=True,
             help="paper model: exact: ours; paper: every crossing; approx: ε-grid."),
         Opt("eps", ("--eps",), "float",
@@ -223,6 +228,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("elasticity", ("--elasticity",), "choice", choices=MATERIAL_MODELS,
             help="Material law: linear (SPEC §7); neo-hookean is not supported by check yet "
                  "(it is by optimize and plan)."),
+        _FRICTION,
         _MATERIAL, _UNITS, _MAX_AREA,
         *_DISPLAY,
     ),
@@ -259,6 +265,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
                  "row can be 'held'."),
         *_ACCURACY[:2],
         _ELASTICITY,
+        _FRICTION,
         Opt("eps", ("--eps",), "float",
             help="paper: every pair's quality within eps of its optimum, in joules."),
         Opt("allow_pulling", ("--allow-pulling",), "flag", False,

@@ -20,9 +20,12 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         raise GraspError(f"--top = {p['top']}: must be >= 0")
     if p["verify"] < 0:
         raise GraspError(f"--verify = {p['verify']}: must be >= 0 (0: screen only)")
+    from ..pads.friction_grasp import check_friction, check_friction_model
     from ..pads.refine import check_accuracy
 
     check_accuracy(p["rtol"], p["max_seconds"])
+    p["friction"] = check_friction(p.get("friction"))
+    check_friction_model(p["friction"], p.get("elasticity"))
     if p["model"] == "pads":
         only_for("paper", [("--eps", p["eps"] is not None), ("--expanding", p["expanding"]),
                            ("--jaw-width", p["jaw_width"] != 0.0),
@@ -32,7 +35,8 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
                            ("--allow-pulling", p["allow_pulling"])], "add --model paper")
         return _pads(part, p, progress)
     only_for("pads", [("--verify", p["verify"] != 5), ("--rtol", p["rtol"] is not None),
-                      ("--max-seconds", p["max_seconds"] is not None)], "drop --model paper")
+                      ("--max-seconds", p["max_seconds"] is not None),
+                      ("--friction", p["friction"] > 0)], "drop --model paper")
     return _paper(part, p, progress)
 
 
@@ -62,14 +66,17 @@ def _pads(part, p: dict, progress) -> Report:
         except GraspError as err:
             raise GraspError(f"{err}; or screen only (--verify 0)") from None
     pad = pad_from_options(p["pad_radius"], p["pad_width"], inp.scale, inp.mesh.diameter)
+    from ..pads.friction_grasp import check_friction_model
+
+    elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    check_friction_model(p["friction"], elasticity)
     twin = PadContact(twin_mesh(inp.part)) if inp.part is not None else None
     # the verification's later levels count what the plan keeps (limits.holding)
     with holding(kept_bytes(est)):
         res = plan_pads(inp.mesh, pad, n_angles=p["grid_angles"], n_offsets=p["grid_offsets"],
                         top=p["verify"], twin=twin, progress=progress, part=inp.part,
-                        rtol=p["rtol"], max_seconds=p["max_seconds"],
-                        elasticity=p.get("elasticity") or getattr(inp.mesh.material, "model",
-                                                                   "linear"))
+                        rtol=p["rtol"], max_seconds=p["max_seconds"], friction=p["friction"],
+                        elasticity=elasticity)
     data = {**res.to_dict(), "provenance": provenance(inp.sources)}
     return Report("plan", data, _pads_lines(res, pad, p["top"], inp), inp.warnings, p,
                   (res, inp), _pads_writer)
@@ -87,7 +94,9 @@ def _pads_lines(res, pad, top: int, inp) -> list[str]:
     nv = sum(r["verified"] for r in res.rows)
     lines = [f"{len(res.rows)} grasp axes (pads W = {pad.width * s:.4g}, rho = "
              f"{pad.radius * s:.4g} {unit}); {nv} verified, the others screened "
-             f"(a screened row is a candidate, never 'held')",
+             f"(a screened row is a candidate, never 'held')"
+             + (f"; friction mu = {res.friction:g}: verified rows rank by Q with the release "
+                "work U_A^mu, the screening is frictionless" if res.friction > 0 else ""),
              f"{'rank':>4} {'--axis X,Y,DEG (' + unit + ')':>26} {'sigma*':>9} {'Q (J)':>11} "
              f"{'± (J)':>9} {'verdict':>10}"]
     for i, r in enumerate(res.rows[:max(top, 5)]):

@@ -1,0 +1,415 @@
+"""A pad grasp with Coulomb friction (SPEC §9): ``Q = min(U_A^μ, U_L)`` on the levels of a
+refined grasp, the holding loads at σ*, and the report's friction keys.
+
+The frictionless refinement (:func:`~deformclosure.pads.refine.pad_grasp`) solves each
+level's mesh, factorisation and axis grid; this module re-reads every level with
+friction, on the *same* axis landscape (the same solver, grid, ``σ_L`` and start curve):
+
+* **Release work** ``U_A^μ(σ)`` — :func:`deformclosure.pads.release_work.release_work`:
+  the least peak of ``U(v) − U(start) + Σ D`` over paths to an axis where no pad presses,
+  each move dissipating ``μ Σ f_n |slip|`` with the slip from the rigid relative motion
+  of pads and part and the *frictional* normal forces of the move's start vertex
+  (:func:`~deformclosure.pads.friction.frictional_grasp` of that vertex's curve; where
+  the frictional squeeze of a vertex has no quasi-static solution, or needs more rows
+  than the curve holds, its frictionless forces — counted in ``frictionless_vertices``).
+  The frictional squeeze of every axis the search expands costs about 30 ms on a 216-node
+  mesh against 3 ms for its frictionless curve, and a search expands thousands of axes,
+  so by default the search's moves use the frictionless forces and the escape path found
+  at σ* is re-evaluated with the frictional ones (``path_check``: its peak work and
+  relative difference, 1.5 % on the README block); ``forces="frictional"`` runs the whole
+  search on them.
+  The vertex energies are the landscape's (frictionless) ones: the frictional squeeze of
+  a block differs from it by 0.2 % in force at a 5 % squeeze and by 4.8 % at 23 %
+  (friction restrains the faces' Poisson expansion, ``docs/friction.md``), and the
+  state the part reaches at a *neighbouring* axis is the result of being moved there,
+  which the rigid-move model does not follow.
+* **σ\\*** — ``U_A^μ`` is known only by evaluation (a search per σ, not a piecewise
+  quadratic), so σ* comes from the one sampled σ*-search,
+  :func:`deformclosure.landscape.optimum.maximise_sampled`. Each evaluation stops its
+  search once the work passes ``U_L(σ)``: then ``Q = U_L`` whatever the rest of it.
+* **Error estimate, convergence, verdict** — every level becomes a copy of its
+  :class:`~deformclosure.pads.optimize.PadGraspResult` with the frictional ``sigma_star``,
+  ``quality``, ``U_A``, ``U_L``, escape path and noise floor (the level's relative floor
+  times ``U(σ*)``), gathered in a :class:`~deformclosure.pads.refine.RefinedPadGrasp`:
+  its one error estimate and verdict rule (SPEC §6) apply unchanged. The levels were
+  refined for the frictionless answer (mesh and saddle patches); the frictional estimate
+  is therefore honest but may not meet ``rtol`` (``converged: false`` says so).
+* **Hold** at σ* of the finest level: :meth:`FrictionalCurve.hold` of the start axis.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import GraspError
+from ..landscape.optimum import maximise_sampled
+from .friction import frictional_grasp
+from .landscape import Landscape
+from .optimize import PadGraspResult
+from .refine import DEFAULT_RTOL, RefinedPadGrasp
+from .release_work import (contact_normal_forces, gripper_centre, is_released, move_dissipation,
+                           move_slip, release_work, row_tangents)
+
+__all__ = ["check_friction", "check_friction_model", "FrictionalLevel", "frictional_level", "FrictionalGrasp",
+           "frictional_refined", "hold_to_dict", "SIGMA_SAMPLES"]
+
+#: σ samples of the sampled σ*-search on ``[σ_L, σ0]`` (then halvings around the best).
+SIGMA_SAMPLES = 12
+
+
+def check_friction(mu: Any) -> float:
+    """The Coulomb coefficient of ``--friction`` as a float; one-line error otherwise.
+
+    >>> check_friction(0.5), check_friction(None)
+    (0.5, 0.0)
+    >>> check_friction(-1)
+    Traceback (most recent call last):
+    ...
+    deformclosure.errors.GraspError: --friction = -1: give a Coulomb friction coefficient μ >= 0 (a finite number, e.g. 0.5; 0 = frictionless)
+    """
+    if mu is None:
+        return 0.0
+    if isinstance(mu, bool) or not isinstance(mu, (int, float, np.floating, np.integer)) \
+            or not math.isfinite(float(mu)) or float(mu) < 0:
+        raise GraspError(f"--friction = {mu!r}: give a Coulomb friction coefficient μ >= 0 "
+                         "(a finite number, e.g. 0.5; 0 = frictionless)")
+    return float(mu)
+
+
+def check_friction_model(mu: float, elasticity: str | None) -> None:
+    """Refuse friction (``mu > 0``) with a material law it is not built on (SPEC §9 is on
+    the linear model; neo-Hookean pads are frictionless, SPEC §8)."""
+    if mu > 0 and elasticity == "neo-hookean":
+        raise GraspError("--friction with --elasticity neo-hookean (or material.model "
+                         "neo-hookean): not yet supported (friction is built on the linear "
+                         "model, SPEC §9); use --friction 0 or --elasticity linear")
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionalLevel:
+    """One level read with friction.
+
+    Attributes
+    ----------
+    result : PadGraspResult
+        The level with the frictional ``sigma_star`` (m), ``quality``, ``U_A``, ``U_L``
+        (J), escape path and noise floor (J).
+    frictionless : PadGraspResult
+        The level as solved without friction.
+    mu : float
+    dissipation : float
+        Dissipation (J) along the escape path at σ* (``nan`` without one).
+    works : list of float
+        Work (J) at each axis of the escape path (``U(v) − U(start)`` + dissipation so far).
+    frictionless_vertices : int
+        Axes whose frictional squeeze was asked for but could not be solved (their
+        frictionless normal forces were used).
+    expanded : int
+        Axes whose frictional squeeze was asked for (the search's expanded axes with
+        ``forces="frictional"``, else the escape path's and the start).
+    forces : str
+        The normal forces of the search's moves (``"frictionless"`` or ``"frictional"``).
+    path_check : dict or None
+        The escape path at σ* with every move's normal forces from the frictional squeeze
+        of its start axis: ``{"work", "dissipation"}`` (J; the path's peak work is an upper
+        bound of ``U_A^μ`` with those forces) and ``relative`` (its difference from
+        ``U_A``).
+    hold : dict or None
+        :meth:`FrictionalCurve.hold` at σ* (N, N·m; may hold ``±inf``), if computed.
+    hold_error : str or None
+        Why ``hold`` is missing, if it is.
+    """
+
+    result: PadGraspResult
+    frictionless: PadGraspResult
+    mu: float
+    dissipation: float
+    works: list
+    frictionless_vertices: int
+    expanded: int
+    forces: str = "frictionless"
+    path_check: dict | None = None
+    hold: dict | None = None
+    hold_error: str | None = None
+
+
+def _hole_of(solver, curve) -> int | None:
+    """The hole an expanding curve opens in (``None``: contracting)."""
+    if not curve.expanding:
+        return None
+    return next(k for k, lp in enumerate(solver.mesh.hole_loops) if np.isin(curve.nodes[0], lp))
+
+
+def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = None,
+                     n_samples: int = SIGMA_SAMPLES, hold: bool = False,
+                     forces: str = "frictionless") -> FrictionalLevel:
+    """Re-read one solved level ``res`` with Coulomb coefficient ``mu`` (module docstring).
+
+    Parameters
+    ----------
+    res : PadGraspResult
+        A level solved by :func:`~deformclosure.pads.optimize.optimize_pads` (its solver,
+        grid and start curve are reused).
+    mu : float
+        Coulomb coefficient, ``> 0`` (``0`` returns the level unchanged).
+    rtol : float, optional
+        Relative accuracy of Q* for the sampled σ*-search (default
+        :data:`~deformclosure.pads.refine.DEFAULT_RTOL`).
+    n_samples : int
+        σ samples of the search.
+    hold : bool
+        Also compute the holding force and torque at σ*.
+    forces : {"frictionless", "frictional"}
+        The normal forces of the moves in the search: the landscape's frictionless ones
+        (default: cheap), or each expanded axis' frictional squeeze (about 30 ms per axis
+        on a 216-node mesh, thousands of axes). With ``hold`` (or ``"frictional"``) the
+        escape path found at σ* is re-evaluated with the frictional forces
+        (``path_check``).
+
+    Returns
+    -------
+    FrictionalLevel
+    """
+    mu = check_friction(mu)
+    if forces not in ("frictionless", "frictional"):
+        raise GraspError(f"forces = {forces!r}: choose one of frictionless, frictional")
+    if mu == 0.0:
+        return FrictionalLevel(res, res, 0.0, math.nan, [], 0, 0)
+    solver, start_curve = res.solver, res.start_curve
+    land = Landscape(solver, res.pad, res.grid, res.sigma_L, _hole_of(solver, start_curve))
+    s = res.grid.vertex(0, 0)
+    land.seed(s, start_curve)
+    # id(curve) -> (curve, FrictionalCurve or None, index of each row of curve in its rows)
+    frictional: dict[int, tuple] = {}
+    fallback: set[int] = set()
+
+    def frictional_curve(curve) -> tuple:
+        key = id(curve)
+        got = frictional.get(key)
+        if got is None:
+            rows = curve
+            if curve is start_curve:
+                # the start is traced to σ = 0 (full closure, where a stick/slip path
+                # need not exist); the search and the hold need it only down to σ_L
+                rows = solver.curve(curve.axis, curve.pad, res.sigma_L, land.hole)
+            try:
+                fc = frictional_grasp(solver, rows, mu)
+            except GraspError:
+                fc = None
+            at = None
+            if fc is not None:      # its rows may be re-taken (friction.py): match them
+                index = {(int(n), int(q)): i for i, (n, q) in
+                         enumerate(zip(fc.curve.nodes, fc.curve.pad_of))}
+                at = np.array([index.get((int(n), int(q)), -1)
+                               for n, q in zip(curve.nodes, curve.pad_of)], int)
+            got = frictional[key] = (curve, fc, at)
+        return got[1], got[2]
+
+    def frictional_forces(curve, sigma: float) -> np.ndarray:
+        if is_released(curve, sigma):
+            return np.zeros(len(curve.nodes))
+        fc, at = frictional_curve(curve)
+        if fc is not None:
+            lam = fc.forces(sigma)[0]
+            out = np.where(at >= 0, lam[np.maximum(at, 0)], 0.0)
+            # a force on a row the curve does not have would be lost: not comparable
+            if out.sum() >= lam.sum() * (1 - 1e-9):
+                return out
+        fallback.add(id(curve))
+        return contact_normal_forces(curve, sigma)
+
+    Us = start_curve.energy_at
+    U_sL = float(Us(res.sigma_L))
+    cache: dict = {}                 # rows and slips, the same at every σ
+    search_forces = frictional_forces if forces == "frictional" else None
+
+    def work(sig: float, stop: float | None = None):
+        return release_work(land, s, sig, mu, normal_forces=search_forces, stop_above=stop,
+                            cache=cache)
+
+    samples: list[tuple[float, float, float, bool]] = []     # (σ, U_A or bound, U_L, exact)
+
+    def quality(sig: float) -> float:
+        UL = U_sL - float(Us(sig))
+        if UL <= 0.0:
+            samples.append((sig, 0.0, UL, False))
+            return 0.0
+        esc = work(sig, stop=UL)       # past U_L the rest of the search cannot matter
+        # a search stopped above U_L leaves a lower bound; a complete one without a
+        # release: no way out (∞)
+        ua = esc.work if (esc.released or not esc.complete) else math.inf
+        samples.append((sig, ua, UL, esc.complete))
+        return min(esc.work, UL)
+
+    lo, hi = sorted((res.sigma_L, res.sigma0))
+    rtol = DEFAULT_RTOL if rtol is None else rtol
+    best = maximise_sampled(quality, lo, hi, n_samples, rtol, 1e-4 * (hi - lo))
+    if best is None:
+        sigma_star, UA, UL, esc = None, 0.0, 0.0, None
+        q = 0.0
+    else:
+        sigma_star = best[1]
+        esc = work(sigma_star)
+        UA = esc.work if esc.released else math.inf
+        UL = U_sL - float(Us(sigma_star))
+        q = min(UA, UL)
+    grid = res.grid
+    path = list(esc.path) if esc is not None and esc.released else []
+    saddle = None
+    if path and len(path) > 1:
+        saddle = grid.axis(path[int(np.argmax(esc.works))])
+    noise = res.noise_relative * float(Us(sigma_star)) if sigma_star is not None else res.noise
+    new = dataclasses.replace(
+        res, sigma_star=sigma_star, quality=q, U_A=UA, U_L=UL, noise=noise,
+        curve=_sampled_curve(samples, Us, start_curve.axial_force, res.curve),
+        escape_path=[grid.axis(v) for v in path], saddle=saddle, escape_vertices=tuple(path),
+        n_axes=land.n_evaluated)
+    # the frictional squeezes of the path's axes cost more than the search on fine
+    # meshes: checked where the hold is asked for (the finest level of a run)
+    check = (_path_check(land, path, sigma_star, mu, frictional_forces, cache)
+             if path and (hold or forces == "frictional") else None)
+    if check is not None:
+        check["relative"] = (check["work"] - UA) / UA if UA > 0 else None
+    fails = len(fallback)
+    out = FrictionalLevel(new, res, mu, esc.dissipation if path else math.nan,
+                          list(esc.works) if path else [], fails, len(frictional), forces,
+                          check)
+    if hold and sigma_star is not None:
+        fc = frictional_curve(start_curve)[0]
+        if fc is None:
+            return dataclasses.replace(out, hold_error="the frictional squeeze of the start "
+                                       "axis has no quasi-static solution")
+        try:
+            return dataclasses.replace(out, hold=fc.hold(sigma_star))
+        except GraspError as err:
+            return dataclasses.replace(out, hold_error=str(err))
+    return out
+
+
+def _sampled_curve(samples: list, Us, force, frictionless: dict) -> dict:
+    """The report's ``curve`` with friction: the σ*-search's samples in σ (m) — ``U``,
+    ``U_A`` (the release work, J; where the search stopped above ``U_L`` a lower bound,
+    ``U_A_bound`` true), ``U_L``, ``Q`` (J), ``F`` (N) — and the frictionless curve as
+    ``frictionless``."""
+    samples = sorted(samples)
+
+    def num(v: float):
+        return None if not math.isfinite(v) else float(v)
+
+    return {"sigma": [x[0] for x in samples], "U": [float(Us(x[0])) for x in samples],
+            "U_A": [num(x[1]) for x in samples], "U_A_bound": [not x[3] for x in samples],
+            "U_L": [float(x[2]) for x in samples],
+            "Q": [float(max(min(x[1], x[2]), 0.0)) for x in samples],
+            "F": [float(force(x[0])) for x in samples], "frictionless": frictionless}
+
+
+def _path_check(land: Landscape, path: list, sigma: float, mu: float, forces_of,
+                cache: dict) -> dict:
+    """The works along ``path`` at ``sigma`` with ``forces_of`` (frictional) normal forces
+    (:class:`FrictionalLevel` ``path_check``); the moves' slips are the search's."""
+    U0 = land.energy(path[0], sigma)
+    works, d = [0.0], 0.0
+    for v, w in zip(path[:-1], path[1:]):
+        c = land.curve(v)
+        f = np.asarray(forces_of(c, sigma), float)
+        if f.any():
+            slip = cache.get("slips", {}).get((v, w))
+            if slip is None:
+                slip = move_slip(land.solver.mesh.nodes[c.nodes], row_tangents(c.normals),
+                                 land.grid.axis(v), gripper_centre(c), land.grid.axis(w),
+                                 gripper_centre(land.curve(w)))
+            d += move_dissipation(mu, f, slip)
+        works.append(land.energy(w, sigma) - U0 + d)
+    return {"work": max(works), "dissipation": d, "works": works}
+
+
+def hold_to_dict(hold: dict | None, reason: str | None = None) -> dict[str, Any] | None:
+    """The report's ``hold`` (JSON has no infinity): ``force`` [N] and ``torque`` [N·m]
+    pairs ``[−, +]`` with ``None`` where the linear kinematics never lets go, a ``reason``
+    saying so, and ``slide`` (the loads at which every contact slides: the friction
+    exhausted, finite wherever friction is what holds)."""
+    if hold is None:
+        return None if reason is None else {"force": None, "torque": None, "slide": None,
+                                            "reason": reason}
+
+    def pair(v):
+        return [None if not math.isfinite(x) else float(x) for x in v]
+
+    unbounded = [k for k in ("force", "torque") if not all(map(math.isfinite, hold[k]))]
+    why = None
+    if unbounded:
+        why = (f"{' and '.join(unbounded)}: no gross slip in the small-displacement "
+               "kinematics (the part jams or is wedged on the pads' curvature; leaving that "
+               "is large motion, measured by the release work U_A); 'slide' gives the load "
+               "at which the friction is exhausted")
+    return {"force": pair(hold["force"]), "torque": pair(hold["torque"]),
+            "slide": {"force": pair(hold["slide"]["force"]),
+                      "torque": pair(hold["slide"]["torque"])},
+            "reason": why, "units": {"force": "N", "torque": "N*m"}}
+
+
+@dataclass(frozen=True, eq=False)
+class FrictionalGrasp:
+    """A refined pad grasp read with friction on every level.
+
+    Attributes
+    ----------
+    refined : RefinedPadGrasp
+        The frictional levels (their error estimate, convergence and verdict, SPEC §6).
+    frictionless : RefinedPadGrasp
+        The run as solved without friction.
+    levels : list of FrictionalLevel
+    mu : float
+    """
+
+    refined: RefinedPadGrasp
+    frictionless: RefinedPadGrasp
+    levels: list = field(default_factory=list)
+    mu: float = 0.0
+
+    @property
+    def finest(self) -> FrictionalLevel:
+        return self.levels[-1]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The refined report (frictional values) plus ``friction``, ``hold``,
+        ``dissipation``, ``release_work`` and the frictionless answer for comparison."""
+        d = self.refined.to_dict()
+        fin = self.finest
+        d["friction"] = self.mu
+        d["U_A_model"] = "release work with dissipation (SPEC §9)"
+        d["hold"] = hold_to_dict(fin.hold, fin.hold_error)
+        d["dissipation"] = None if not math.isfinite(fin.dissipation) else fin.dissipation
+        check = fin.path_check
+        d["release_work"] = {
+            "forces": fin.forces, "works": fin.works,
+            "path_check": None if check is None else
+            {"forces": "frictional", "work": check["work"], "dissipation": check["dissipation"],
+             "relative": check["relative"]},
+            "frictional_axes": fin.expanded, "frictionless_fallback": fin.frictionless_vertices}
+        fl = self.frictionless
+        d["frictionless"] = {"sigma_star": fl.finest.sigma_star, "quality": fl.finest.quality,
+                             "U_A": None if math.isinf(fl.finest.U_A) else fl.finest.U_A,
+                             "verdict": fl.verdict}
+        return d
+
+
+def frictional_refined(run: RefinedPadGrasp, mu: float, *, hold: bool = True,
+                       n_samples: int = SIGMA_SAMPLES) -> FrictionalGrasp:
+    """Every level of ``run`` read with friction ``mu`` (module docstring); ``hold`` at σ*
+    of the finest level."""
+    mu = check_friction(mu)
+    if mu == 0.0:
+        raise GraspError("--friction: 0 is the frictionless run itself; give μ > 0")
+    last = len(run.levels) - 1
+    levels = [frictional_level(r, mu, rtol=run.rtol, n_samples=n_samples,
+                               hold=hold and k == last) for k, r in enumerate(run.levels)]
+    refined = dataclasses.replace(run, levels=[lv.result for lv in levels],
+                                  saddles=[lv.result.saddle for lv in levels
+                                           if lv.result.saddle is not None])
+    return FrictionalGrasp(refined, run, levels, mu)
