@@ -183,13 +183,15 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
                               n_angles, n_offsets)
     with blas_threads():          # the screening: small solves of every axis (limits.BLAS_THREADS)
         return _plan(mesh, pad, solver, grid, e_L, n_sigma, top, twin, noise_samples,
-                     n_angles, n_offsets, progress, part, rtol, max_seconds)
+                     n_angles, n_offsets, progress, part, rtol, max_seconds, elasticity,
+                     friction)
 
 
 def _plan(mesh, pad: Pad, solver: PadContact, grid: AxisGrid, e_L: float, n_sigma: int,
           top: int, twin: PadContact | None, noise_samples: int, n_angles: int,
           n_offsets: int, progress, part, rtol: float | None,
-          max_seconds: float | None) -> PadPlan:
+          max_seconds: float | None, elasticity: str = "linear",
+          friction: float = 0.0) -> PadPlan:
     """:func:`plan_pads` on a solver and grid: screen, rank and verify."""
     curves = _solve_axes(solver, grid, pad, e_L, progress)
     touching = [c for c in curves if c.touch is not None]
