@@ -41,13 +41,15 @@ def run(part: str, params: dict) -> tuple[float, dict]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="one mesh per grasp (--refine 1)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="the first grasp only, one mesh (the benchmarks' smoke test)")
     args = ap.parse_args()
-    extra = {"refine": 1} if args.quick else {}
+    extra = {"refine": 1} if args.quick or args.smoke else {}
     head = (f"{'grasp':<28} {'t mu=0':>8} {'t mu=0.5':>9} {'ratio':>6} {'Q* mu=0 (J)':>12} "
             f"{'Q* mu=0.5 (J)':>13} {'verdict mu=0':>13} {'verdict mu=0.5':>15} {'hold (N)':>9}")
     print(head)
     print("-" * len(head))
-    for name, part, params in GRASPS:
+    for name, part, params in (GRASPS[:1] if args.smoke else GRASPS):
         t0, d0 = run(part, {**params, **extra})
         t1, d1 = run(part, {**params, **extra, "friction": 0.5})
         hold = d1.get("hold") or {}
