@@ -170,14 +170,15 @@ def test_fingers_built_in_code_are_checked_like_the_file_reader(finger, field):
 
 # ----------------------------------------------------------------------------- one profile
 @settings(max_examples=60, deadline=None)
-@given(st.floats(1e-4, 1e-2), st.floats(0.0, 2 * np.pi),
-       st.floats(-0.5, 1.0, exclude_min=True), st.floats(-0.99, 0.99))
+@given(st.floats(1e-4, 1e-2), st.floats(0.0, 2 * np.pi), st.floats(-0.49, 1.0),
+       st.floats(-0.99, 0.99))
 def test_compiled_disc_gap_is_the_capsule_profile(r, angle, s_frac, x_frac):
     """The placement kernel's disc rows (compiled) use the same surface as the pads: the
     gap along the disc's axis to ``Capsule(0, r).profile`` at the node's cross coordinate,
     scaled to a unit gradient, and no contact beyond the capsule's reach (nodes in front
-    of the disc's back, ``s > −r`` along its axis; at ``s = −r`` exactly the node is on the
-    disc's back, where the kernel measures the true distance instead)."""
+    of the disc's back along its axis: ``s ≥ −0.98 r`` here; within round-off of ``s = −r``
+    the node is on the disc's back, where the kernel measures the true distance instead,
+    and hypothesis finds both ``s = −r`` and the float next to it)."""
     from deformclosure.contact.bodies import Capsule, DiscFinger
     from deformclosure.dspace.placement_energy import _body_sd
 
