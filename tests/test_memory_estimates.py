@@ -57,7 +57,11 @@ def peak_and_estimate(command: str, part: Path, params: dict) -> tuple[float, fl
                                  "refine": 1, "max_area": 0.077}),
 ])
 def test_estimate_bounds_the_peak_within_30_percent(command, part, params):
-    """The estimate is at least the measured peak and at most 1.3 times it."""
+    """The estimate is at least the measured peak and at most 1.3 times it.
+
+    Measured on a second run: the first may compile the numba kernels (a cold cache on a
+    fresh clone), and LLVM's compilation peaks near 2 GB, which is not the analysis's."""
+    peak_and_estimate(command, EXAMPLES / part, params)
     peak, est = peak_and_estimate(command, EXAMPLES / part, params)
     assert peak <= est <= 1.3 * peak, (peak / 1e9, est / 1e9)
 
