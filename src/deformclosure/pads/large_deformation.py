@@ -227,11 +227,6 @@ class FiniteStrainCurve:
             return False
         return True
 
-    def reachable(self, sigma: float) -> bool:
-        """Whether the squeeze at ``sigma`` (m) can be solved."""
-        return self.touch is None or self.delta(sigma) <= self.delta0 or \
-            self.state(self.delta(sigma)) is not None
-
     def energy_at(self, sigma: float) -> float:
         """Stored energy (J) at separation ``sigma`` (m); ``inf`` beyond the reachable
         squeeze (the pads cannot close that far on this model)."""
