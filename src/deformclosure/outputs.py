@@ -35,6 +35,7 @@ from typing import Any, Iterator
 from .errors import DeformClosureError
 
 __all__ = ["atomic_path", "write_text_atomic", "check_outputs", "json_safe", "json_text",
+           "PLOT_FORMATS", "plot_target", "plot_file",
            "write_json", "output_target", "STREAM_OPEN_WAIT"]
 
 #: Longest wait (s) for a process to open a FIFO output for reading.
@@ -301,3 +302,83 @@ def check_outputs(files: list, folders: list = (), inputs: list = ()) -> None:
                 if not os.access(q, os.W_OK | os.X_OK):
                     raise DeformClosureError(f"{d}: folder {q} is not writable")
                 break
+
+
+# ----------------------------------------------------------------------------- pictures
+
+#: Picture formats ``--plot`` writes, by file suffix.
+PLOT_FORMATS = ("png", "svg", "pdf")
+
+
+def plot_target(value: str | Path, flag: str = "--plot") -> tuple[Path, str, str | None]:
+    """Where and how ``--plot VALUE`` writes its figures: ``(folder, format, stem)``.
+
+    A path whose suffix is one of :data:`PLOT_FORMATS` (any case) names a file: its
+    suffix sets the format of every figure, and its stem prefixes their names (``stem``;
+    a command drawing one figure writes that file itself, see :func:`plot_file`). A path
+    without a suffix, or an existing folder, is a folder of PNG figures (``stem`` is
+    ``None``). Any other suffix is refused, before any work.
+
+    Parameters
+    ----------
+    value : str or Path
+        The option's value.
+    flag : str
+        The option's spelling, for the message.
+
+    Returns
+    -------
+    folder : Path
+        Where the figures go (created by the writer).
+    format : str
+        ``"png"``, ``"svg"`` or ``"pdf"``.
+    stem : str or None
+        The file name's stem, or ``None`` for a folder.
+
+    Raises
+    ------
+    DeformClosureError
+        An unknown suffix: one line listing the choices.
+
+    Examples
+    --------
+    >>> plot_target("out/fig.SVG")
+    (PosixPath('out'), 'svg', 'fig')
+    >>> plot_target("out")
+    (PosixPath('out'), 'png', None)
+    >>> plot_target("out/fig.jpg")
+    Traceback (most recent call last):
+    ...
+    deformclosure.errors.DeformClosureError: --plot out/fig.jpg: unknown picture format '.jpg'; choose .png, .svg or .pdf (or a folder)
+    """
+    p = Path(value)
+    if str(value) == "":
+        raise DeformClosureError(f"{flag}: empty path; give a folder or a .png, .svg or .pdf file")
+    suffix = p.suffix.lower()
+    if not suffix or p.is_dir():
+        return p, "png", None
+    if suffix[1:] in PLOT_FORMATS:
+        return p.parent, suffix[1:], p.stem
+    choices = ", ".join(f".{f}" for f in PLOT_FORMATS[:-1]) + f" or .{PLOT_FORMATS[-1]}"
+    raise DeformClosureError(f"{flag} {value}: unknown picture format '{p.suffix}'; choose "
+                             f"{choices} (or a folder)")
+
+
+def plot_file(value: str | Path, name: str, single: bool = False) -> Path:
+    """The file of figure ``name`` (no suffix) for ``--plot VALUE`` (:func:`plot_target`).
+
+    A folder gets ``<folder>/<name>.png``; a file ``dir/fig.svg`` gets
+    ``dir/fig_<name>.svg`` — or, for a command drawing a single figure (``single``),
+    ``dir/fig.svg`` itself.
+
+    Examples
+    --------
+    >>> str(plot_file("out", "quality")), str(plot_file("out/fig.pdf", "quality"))
+    ('out/quality.png', 'out/fig_quality.pdf')
+    >>> str(plot_file("check.svg", "check", single=True))
+    'check.svg'
+    """
+    folder, fmt, stem = plot_target(value)
+    if stem is None:
+        return folder / f"{name}.{fmt}"
+    return Path(value) if single else folder / f"{stem}_{name}.{fmt}"

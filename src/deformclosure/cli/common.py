@@ -33,6 +33,10 @@ def _click_option(opt):
         extra["is_flag"] = True
     elif opt.kind == "choice":
         extra["type"] = click.Choice(list(opt.choices))
+    elif opt.kind == "plot":      # checked as it is parsed: a bad suffix before any work
+        extra["type"] = str
+        extra["callback"] = lambda ctx, param, value: (
+            value if value is None else opt.convert(value, opt.flags[-1]))
     else:
         extra["type"] = kinds[opt.kind]
     if opt.nargs != 1:
@@ -68,6 +72,10 @@ def _check_outputs(command: str, part: str, params: dict) -> None:
             continue
         if opt.role == "input":
             inputs.append(value)
+        elif opt.kind == "plot":             # created by the writer, like a folder
+            from ..outputs import plot_target
+
+            folders.append(plot_target(value, opt.flags[-1])[0])
         elif opt.role == "output":
             (folders if opt.kind == "folder" else files).append(value)
     if command == "optimize" and params.get("export_fields"):

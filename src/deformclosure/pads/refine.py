@@ -221,15 +221,22 @@ class RefinedPadGrasp:
             else "none"
         if self.stopped:
             d["stopped"] = self.stopped
-        d["convergence"] = [
+        d["convergence"] = self.convergence()
+        d["verdict"] = self.verdict
+        return d
+
+    def convergence(self) -> list[dict[str, Any]]:
+        """The report's ``convergence`` rows, one per level (SI): ``level``, ``nodes``,
+        ``grid``, ``sigma_star``, ``quality``, ``U_A`` (``None`` if infinite),
+        ``U_A_infinite``, ``max_area``, ``sigma0``, ``sigma_L``, ``force``,
+        ``n_axes_solved``."""
+        return [
             {"level": k, "nodes": r.n_nodes, "grid": r.to_dict()["grid"],
              "sigma_star": r.sigma_star, "quality": r.quality,
              "U_A": None if math.isinf(r.U_A) else r.U_A, "U_A_infinite": math.isinf(r.U_A),
              "max_area": a, "sigma0": r.sigma0, "sigma_L": r.sigma_L, "force": r.force,
              "n_axes_solved": r.n_axes}
             for k, (a, r) in enumerate(zip(self.max_areas, self.levels))]
-        d["verdict"] = self.verdict
-        return d
 
 
 def _within(err: dict, fine: PadGraspResult, rtol: float) -> bool:

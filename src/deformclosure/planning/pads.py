@@ -334,7 +334,8 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             if friction > 0:
                 res = frictional_refined(res, friction, hold=False).refined
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
-            extra = {"converged": res.converged, "n_levels": len(res.levels)}
+            extra = {"converged": res.converged, "n_levels": len(res.levels),
+                     "convergence": res.convergence()}
         else:
             fine = optimize_pads(mesh, ax, pad, solver=solver, twin=twin, **opts)
             if elasticity == "neo-hookean":

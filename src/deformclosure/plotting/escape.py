@@ -13,7 +13,7 @@ import numpy as np
 
 from ..units import length_scale
 
-__all__ = ["plot_escape_path", "plot_escape_energy", "plot_check_and_escape"]
+__all__ = ["plot_escape_path", "plot_escape_energy", "plot_check_and_escape", "escape_note"]
 
 
 def _path_length(rel: Any) -> np.ndarray:
@@ -105,12 +105,37 @@ def plot_escape_energy(rel: Any, ax: Any = None, units: str = "m") -> Any:
     return ax.figure
 
 
+def escape_note(rel: Any) -> str | None:
+    """Why a release result has no escape path to draw (``None`` when it has one): the
+    escape path and energy panels of :func:`plot_check_and_escape` are then left out and
+    this note is printed under the check."""
+    if len(np.asarray(rel.path)) >= 2:
+        return None
+    if not np.isfinite(rel.U_A):
+        why = ("no placement within the fingers' reach releases the part" +
+               (" (a cage)" if rel.caged else ""))
+        return f"no escape path: U_A = ∞, {why}; the part is held"
+    if not rel.complete:
+        return "no escape path: the search stopped before a release (U_A is a lower bound)"
+    return "no escape path: the part is released at its start (U_A = 0)"
+
+
 def plot_check_and_escape(mesh: Any, closure: Any, rel: Any, fingers: Sequence[Any], units: str = "m") -> Any:
     """One figure: the deform-closure check at rest (:func:`.dspace.plot_check`), the escape
-    path and its energy profile. Returns the figure."""
+    path and its energy profile — or, when there is no escape path to draw (``U_A``
+    infinite, a release at the start), the check alone with a note saying why
+    (:func:`escape_note`). Returns the figure."""
     from .dspace import plot_check
     from .mesh import new_figure
 
+    note = escape_note(rel)
+    if note is not None:
+        fig, ax = new_figure(figsize=(7, 6))
+        plot_check(mesh, closure, fingers, ax=ax, units=units)
+        ax.set_title("rigid test: " + ax.get_title(), fontsize=9)
+        ax.text(0.5, -0.12, note, transform=ax.transAxes, ha="center", va="top", fontsize=9,
+                wrap=True)
+        return fig
     fig, _ = new_figure(figsize=(16, 5.5))
     fig.clf()
     axes = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 1.1]})

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .mesh import figure_axes, plot_mesh, save_plots, legend_outside
+from .mesh import figure_axes, legend_below, legend_outside, plot_mesh, save_plots
 
 __all__ = ["plot_quality_curve", "plot_deformed_grasp", "plot_energy_landscape",
            "save_grasp_plots", "plot_quality_map", "plot_top_grasps", "save_plan_plots",
@@ -89,7 +89,7 @@ def plot_deformed_grasp(analysis, ax=None, units: str = "mm"):
     ax.set_title(f"deformed at σ = {sigma * s:.4g} {units}, max strain "
                  f"{strain.max():.3g} (e_L = {mesh.material.elastic_limit_strain:g})"
                  if mesh.material is not None else f"deformed at σ = {sigma * s:.4g} {units}")
-    legend_outside(ax)
+    legend_below(ax)   # the colour bar is on the right
     return ax.figure
 
 
@@ -135,12 +135,14 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
     ax.set_ylabel(f"jaw 2 arclength ({units})")
     ax.set_aspect("equal")
     ax.set_title(f"energy landscape at σ = {sigma * s:.4g} {units}")
-    legend_outside(ax)
+    legend_below(ax)   # the colour bar is on the right
     return ax.figure
 
 
 def save_grasp_plots(analysis, out_dir: str | Path, units: str = "mm") -> list[Path]:
-    """Write ``quality.png``, ``deformed.png`` and ``landscape.png`` into ``out_dir``."""
+    """Write ``quality``, ``deformed`` and ``landscape`` for ``--plot out_dir`` (a folder of
+    PNGs, or a .png/.svg/.pdf file setting the format and the names' stem,
+    :func:`~deformclosure.plotting.mesh.plot_path`)."""
     return save_plots(analysis, out_dir, units, (("quality.png", plot_quality_curve, (7, 4.5)),
                                                  ("deformed.png", plot_deformed_grasp, (6, 6)),
                                                  ("landscape.png", plot_energy_landscape, (6.5, 5.5))))
@@ -290,6 +292,7 @@ def plot_top_grasps(plan, ax=None, units: str = "mm", n: int = 5):
 
 
 def save_plan_plots(plan, out_dir: str | Path, units: str = "mm") -> list[Path]:
-    """Write ``quality_map.png`` and ``top_grasps.png`` into ``out_dir``."""
+    """Write ``quality_map`` and ``top_grasps`` for ``--plot out_dir`` (see
+    :func:`save_grasp_plots`)."""
     return save_plots(plan, out_dir, units, (("quality_map.png", plot_quality_map, (6.5, 6.5)),
                                              ("top_grasps.png", plot_top_grasps, (8, 6))))

@@ -8,7 +8,8 @@ import numpy as np
 
 from ..units import length_scale
 
-__all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure", "figure_axes", "save_plots"]
+__all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure", "figure_axes", "save_plots",
+           "plot_path", "legend_outside", "legend_below", "side_colorbar"]
 
 
 def new_figure(figsize=(6, 6)):
@@ -29,18 +30,30 @@ def figure_axes(ax, figsize, units: str):
     return ax, 1.0 / length_scale(units)
 
 
-def save_plots(obj, out_dir: str | Path, units: str, specs) -> list[Path]:
+def save_plots(obj, target: str | Path, units: str, specs) -> list[Path]:
     """Draw ``fn(obj, ax=ax, units=units)`` on a new figure of ``size`` and save it as
-    ``out_dir / name`` for every ``(name, fn, size)`` of ``specs``; return the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    figure ``name`` of ``--plot target`` (:func:`plot_path`) for every ``(name, fn,
+    size)`` of ``specs`` (a suffix on ``name`` is dropped: the target sets the format);
+    return the paths."""
     paths = []
     for name, fn, size in specs:
         fig, ax = new_figure(size)
         fn(obj, ax=ax, units=units)
-        save_figure(fig, out / name)
-        paths.append(out / name)
+        path = plot_path(target, Path(name).stem)
+        save_figure(fig, path)
+        paths.append(path)
     return paths
+
+
+def plot_path(target: str | Path, name: str, single: bool = False) -> Path:
+    """The file of figure ``name`` for ``--plot target``
+    (:func:`deformclosure.outputs.plot_file`: a folder of PNGs, or ``dir/stem.svg`` →
+    ``dir/stem_<name>.svg``), its folder created."""
+    from ..outputs import plot_file
+
+    path = plot_file(target, name, single)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def legend_outside(ax, **kw):
@@ -48,6 +61,27 @@ def legend_outside(ax, **kw):
     figures use a tight bounding box, so it stays in the picture)."""
     kw.setdefault("fontsize", 8)
     return ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kw)
+
+
+def legend_below(ax, **kw):
+    """The axes' legend centred below the axes (and their x label), for axes with a
+    colour bar on their right, where :func:`legend_outside` would sit behind the bar."""
+    kw.setdefault("fontsize", 8)
+    handles, labels = ax.get_legend_handles_labels()
+    kw.setdefault("ncol", max(1, min(3, len(labels))))
+    # its top 4.5 font sizes below the axes: under the tick labels and the x label
+    return ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=4.5,
+                     frameon=False, **kw)
+
+
+def side_colorbar(ax, mappable, label: str):
+    """A colour bar as tall as ``ax`` on its right (also for equal-aspect axes), labelled."""
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
+    cax = make_axes_locatable(ax).append_axes("right", size="4%", pad=0.12)
+    cb = ax.figure.colorbar(mappable, cax=cax)
+    cb.set_label(label)
+    return cb
 
 
 def save_figure(fig, path: str | Path) -> None:

@@ -1,16 +1,30 @@
-"""Pictures of pad grasps (SPEC §6): the quality curve, the gripper on the part, plans."""
+"""Pictures of pad grasps (SPEC §6): the part deformed at σ* with its averaged strain, the
+pads and the contact pressure; the quality and force curves; the escape path; the
+convergence of a refined run; and of plans, the quality map over (θ, c) and the best
+grasps deformed.
+
+Every ``plot_*`` function draws on ``ax`` (a new figure when ``None``) or makes its own
+figure (the strips), and returns the figure. Lengths in ``units``, energies in mJ,
+forces in N, strains in m/m, pressures in Pa (or kPa, MPa).
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..units import length_scale
 from .grasp import quality_lines, sigma_marks
-from .mesh import figure_axes, save_plots, legend_outside
+from .mesh import (figure_axes, legend_below, legend_outside, plot_path, save_figure,
+                   side_colorbar)
 
-__all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots"]
+__all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots",
+           "PadState", "pad_state", "curve_state", "draw_state", "plot_force_squeeze",
+           "escape_states", "plot_escape_strip", "plot_convergence", "plot_pad_quality_map",
+           "plot_pad_top_grasps", "plot_plan_convergence", "save_pad_plan_plots",
+           "check_scale"]
 
 
 def _nan(v) -> np.ndarray:
@@ -91,72 +105,662 @@ def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
     return ax
 
 
-def plot_pad_grasp(result, mesh, ax=None, units: str = "mm"):
-    """The part with the closing axis, the pads at σ*, the contact points and the escape.
+@dataclass(frozen=True)
+class PadState:
+    """A pad grasp solved at one separation, for pictures (SI units).
+
+    The part is drawn in the gauge of its solver (mean displacement and mean rotation
+    zero, SPEC §6), the pads where the contact path puts them relative to it: pad A's
+    face at ``z_a`` and pad B's at ``z_b`` along the axis (m), both moved by the part's
+    axial translation ``t`` of the path so that the pads touch the deformed part.
+
+    Attributes
+    ----------
+    sigma : float
+        Separation (m).
+    delta : float
+        Squeeze (m).
+    displacement : ndarray, shape (n, 2)
+        Node displacements (m), in the solver's gauge.
+    translation : float
+        The part's axial translation on the contact path (m).
+    forces : ndarray, shape (n, 2)
+        Contact forces on the nodes (N).
+    strain : ndarray, shape (m,)
+        Per element, the largest absolute principal value of the strain averaged over
+        the critical-distance disc (dimensionless, m/m): SPEC §6's measure, whose maximum
+        is compared with ``e_L``.
+    pressure : ndarray, shape (n,)
+        Contact pressure (Pa): normal force over the node's tributary boundary length
+        times the thickness (:func:`deformclosure.fields.state_data`).
+    energy : float
+        Grasp energy (J).
+    force : float
+        The pads' axial force (N).
+    """
+
+    sigma: float
+    delta: float
+    displacement: np.ndarray
+    translation: float
+    forces: np.ndarray
+    strain: np.ndarray
+    pressure: np.ndarray
+    energy: float
+    force: float
+
+
+def curve_state(solver, curve, sigma: float, ell: float) -> PadState:
+    """The state of one grasp curve (a :class:`~deformclosure.pads.contact.GraspCurve` on
+    ``solver``) at separation ``sigma`` (m), strains averaged over ``ell`` (m)."""
+    from ..fields import FieldState, state_data
+
+    mesh = solver.mesh
+    n = mesh.n_nodes
+    forces = np.zeros((n, 2))
+    path = curve.path
+    if path is None:
+        u, t, delta = np.zeros(2 * n), 0.0, 0.0
+    else:
+        delta = float(curve.delta(sigma))
+        lam = path.multipliers(delta)
+        np.add.at(forces, curve.nodes, lam[:, None] * curve.normals)
+        u = solver.displacement(solver.load_vector(curve, lam))
+        t = float(np.interp(delta, path.delta, path.t)) if len(path.delta) > 1 else 0.0
+    point, cell = state_data(mesh, FieldState("picture", u, forces), ell)
+    strain = np.asarray(cell["strain_magnitude_averaged"], float).reshape(-1)
+    return PadState(float(sigma), delta, np.asarray(u, float).reshape(n, 2), t, forces,
+                    strain, np.asarray(point["contact_pressure"], float).reshape(-1),
+                    float(curve.energy_at(sigma)), float(curve.axial_force(sigma)))
+
+
+def pad_state(result, sigma: float | None = None) -> PadState:
+    """The state of ``result`` (a PadGraspResult) on its start axis at ``sigma`` (m;
+    default σ*, or first touch when ``Q ≡ 0``)."""
+    if sigma is None:
+        sigma = result.sigma_star if result.sigma_star is not None else result.sigma0
+    return curve_state(result.solver, result.start_curve, sigma,
+                       result.limit.critical_distance)
+
+
+def _pad_outlines(curve, pad, state: PadState, scale: float, depth: float) -> list[np.ndarray]:
+    """Outlines (m) of pads A and B of ``curve`` at ``state``, displacements × ``scale``:
+    A's face at ``z_a − t``, B's at ``z_b − δ − t`` (the contact path's frame)."""
+    touch = curve.touch
+    t, d = scale * state.translation, scale * state.delta
+    if touch.expanding:                         # back to back inside the hole
+        depth = min(depth, 0.45 * max(abs(touch.z_a - touch.z_b) + d, 1e-12))
+    return [_capsule(pad, curve.axis, touch.z_a - t, 1, 1.0, depth),
+            _capsule(pad, curve.axis, touch.z_b - d - t, -1, 1.0, depth)]
+
+
+def _pad_depth(result) -> float:
+    """How far (m) the drawn pads reach behind their faces."""
+    return 0.15 * max(result.sigma0, result.pad.half_span)
+
+
+def _frame(ax, pts: np.ndarray, margin: float = 0.04) -> None:
+    """Axes limits on the points ``pts`` (plot units) with ``margin`` of their span, equal
+    aspect: the frame fits the part, not the lines drawn across it."""
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    pad = margin * float(np.max(hi - lo))
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal", adjustable="box")
+
+
+def _strain_label(result, units: str) -> str:
+    s = 1.0 / length_scale(units)
+    return (f"averaged strain magnitude (m/m)\nover ℓ = "
+            f"{result.limit.critical_distance * s:.3g} {units}")
+
+
+def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: float = 1.0,
+               depth: float | None = None, norm=None, cmap: str = "viridis",
+               pressure: bool = True, rest: bool = True):
+    """Draw the deformed part of ``state`` (displacements × ``scale``) coloured by its
+    averaged strain, the rest outline dashed, the pads and (``pressure``) the contact
+    pressure as arrows into the boundary. Returns the colour mapping (for a colour bar)
+    and the points (plot units) the frame should hold."""
+    import matplotlib.tri as mtri
+
+    s = 1.0 / length_scale(units)
+    xy = (mesh.nodes + scale * state.displacement) * s
+    tri = mtri.Triangulation(xy[:, 0], xy[:, 1], mesh.triangles)
+    pc = ax.tripcolor(tri, facecolors=state.strain, cmap=cmap, norm=norm, edgecolors="face",
+                      linewidth=0.0, zorder=1)
+    for i, lp in enumerate(mesh.loops):
+        ring = np.append(lp, lp[0])
+        if rest:
+            ax.plot(mesh.nodes[ring, 0] * s, mesh.nodes[ring, 1] * s, color="0.45", lw=0.8,
+                    ls="--", zorder=2, label="part at rest" if i == 0 else None)
+        ax.plot(xy[ring, 0], xy[ring, 1], color="k", lw=1.0, zorder=3)
+    if depth is None:
+        depth = 0.15 * max(curve.sigma0, pad.half_span)
+    if curve.touch is not None:
+        for k, P in enumerate(_pad_outlines(curve, pad, state, scale, depth)):
+            ax.fill(P[:, 0] * s, P[:, 1] * s, color="0.35", alpha=0.75, lw=0, zorder=4,
+                    label="pads" if k == 0 else None)
+    if pressure:
+        _draw_pressure(ax, mesh, xy, state, s)
+    return pc, xy
+
+
+def _draw_pressure(ax, mesh, xy: np.ndarray, state: PadState, s: float) -> None:
+    """Contact pressure as arrows along the force on each pressed node, pointing at it,
+    their lengths proportional to the pressure (the longest 12 % of the part's size)."""
+    p = state.pressure
+    on = np.flatnonzero(p > 0)
+    if not len(on):
+        return
+    f = state.forces[on]
+    d = f / np.linalg.norm(f, axis=1)[:, None]
+    L = 0.12 * mesh.diameter * s * p[on] / p[on].max()
+    tail = xy[on] - d * L[:, None]
+    ax.quiver(tail[:, 0], tail[:, 1], d[:, 0] * L, d[:, 1] * L, angles="xy",
+              scale_units="xy", scale=1, color="C3", width=0.004, zorder=6,
+              label=f"contact pressure (max {_pressure_text(p.max())})")
+
+
+def _pressure_text(p: float) -> str:
+    for unit, f in (("GPa", 1e9), ("MPa", 1e6), ("kPa", 1e3)):
+        if p >= f:
+            return f"{p / f:.3g} {unit}"
+    return f"{p:.3g} Pa"
+
+
+def plot_pad_grasp(result, mesh=None, ax=None, units: str = "mm", scale: float = 1.0,
+                   sigma: float | None = None):
+    """The part deformed at σ* coloured by the critical-distance strain, the pads at σ*,
+    the contact pressure along the boundary and the grip force (SPEC §6).
 
     Parameters
     ----------
     result : PadGraspResult
-    mesh : Mesh
+    mesh : Mesh, optional
+        Unused: the picture draws the mesh ``result`` was solved on (``result.solver``).
     ax : matplotlib Axes, optional
     units : str
+        Length unit of the axes.
+    scale : float
+        Displacements drawn ``scale`` times their size (1: true scale); the pads move
+        with them.
+    sigma : float, optional
+        Separation (m); default σ* (first touch when ``Q ≡ 0``).
 
     Returns
     -------
     matplotlib.figure.Figure
-        The figure holding ``ax`` (compose it with others, or save it).
+        The figure holding ``ax``; the colour bar is labelled in the strain's units (m/m)
+        and marks ``e_L``; the legend sits below the axes.
     """
-    ax, s = figure_axes(ax, (6, 6), units)
-    _outline(ax, mesh, s)
-    a = result.axis.direction
-    c = result.contacts * s
-    mid = c.mean(axis=0)
-    L = 0.75 * mesh.diameter * s
-    ax.plot([mid[0] - L * a[0], mid[0] + L * a[0]], [mid[1] - L * a[1], mid[1] + L * a[1]],
-            color="C3", lw=0.8, ls="-.")
-    draw_pads(ax, result, result.sigma_star, units)
-    ax.plot(c[:, 0], c[:, 1], "o", color="C3", ms=4)
-    for ax_i in result.escape_path[1:]:
-        p = ax_i.point * s
-        d = ax_i.direction
-        ax.plot([p[0] - L * d[0], p[0] + L * d[0]], [p[1] - L * d[1], p[1] + L * d[1]],
-                color="C2", lw=0.5, alpha=0.6)
-    ax.set_aspect("equal")
+    from matplotlib.colors import Normalize
+
+    ax, s = figure_axes(ax, (6.5, 6.5), units)
+    check_scale(scale)
+    msh = result.solver.mesh
+    st = pad_state(result, sigma)
+    e_L = result.e_L
+    top = max(float(st.strain.max()), e_L or 0.0, 1e-300)
+    pc, xy = draw_state(ax, msh, result.start_curve, result.pad, st, units, scale,
+                        _pad_depth(result), norm=Normalize(0.0, top))
+    _frame(ax, np.vstack([xy, msh.nodes * s]))
+    cb = side_colorbar(ax, pc, _strain_label(result, units)
+                       + ("" if e_L is None else f"; red: $e_L$ = {e_L:g}"))
+    if e_L is not None:
+        cb.ax.axhline(e_L, color="C3", lw=2)
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    sig = "-" if result.sigma_star is None else f"{result.sigma_star * s:.4g} {units}"
-    ax.set_title(f"{result.verdict}: σ* = {sig}, Q* = {result.quality * 1e3:.4g} mJ")
+    how = "true scale" if scale == 1 else f"displacements × {scale:g}"
+    at = "σ*" if sigma is None and result.sigma_star is not None else "σ"
+    ax.set_title(f"{result.verdict}: {at} = {st.sigma * s:.4g} {units}, F = {st.force:.4g} N, "
+                 f"Q* = {result.quality * 1e3:.4g} mJ\nmax averaged strain "
+                 f"{st.strain.max():.3g}" + ("" if e_L is None else f" (e_L = {e_L:g})")
+                 + f"; {how}", fontsize=9)
+    legend_below(ax)
+    return ax.figure
+
+
+def check_scale(scale: float) -> float:
+    """``--scale``: a finite number > 0; one line naming the option otherwise."""
+    import math
+
+    from ..errors import DeformClosureError
+
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale) \
+            or scale <= 0:
+        raise DeformClosureError(f"--scale = {scale!r}: give a number > 0 (1 = true scale)")
+    return float(scale)
+
+
+def plot_force_squeeze(result, ax=None, units: str = "mm"):
+    """The pads' axial force ``F(σ)`` (N) from first touch ``σ0`` to the elastic limit
+    ``σ_L``, with σ* (and ``F(σ*)``) and ``σ_L`` marked.
+
+    Parameters
+    ----------
+    result : PadGraspResult
+    ax : matplotlib Axes, optional
+    units : str
+        Length unit of σ.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    ax, s = figure_axes(ax, (7, 4.5), units)
+    c = result.curve
+    sig, F = _nan(c["sigma"]) * s, _nan(c["F"])
+    order = np.argsort(sig)
+    ax.plot(sig[order], F[order], color="k", lw=1.4, label="$F(\\sigma)$, each pad")
+    if result.sigma_star is not None:
+        f = result.force
+        ax.axvline(result.sigma_star * s, color="C3", ls="--", lw=1)
+        ax.plot([result.sigma_star * s], [f], "o", color="C3",
+                label=f"$\\sigma^*$ = {result.sigma_star * s:.4g} {units}: F = {f:.4g} N")
+    ax.axvline(result.sigma_L * s, color="C1", ls=":", lw=1,
+               label=f"$\\sigma_L$ = {result.sigma_L * s:.4g} {units} (elastic limit)")
+    ax.axvline(result.sigma0 * s, color="0.5", ls="-.", lw=0.8,
+               label=f"$\\sigma_0$ = {result.sigma0 * s:.4g} {units} (first touch)")
+    ax.set_xlabel(f"pad separation σ ({units})")
+    ax.set_ylabel("grip force F (N)")
+    stiff = result.stiffness
+    ax.set_title("force against squeeze" + ("" if stiff is None else
+                                            f"; stiffness at σ* {stiff:.4g} N/m"))
+    ax.grid(alpha=0.3)
+    legend_outside(ax)
+    return ax.figure
+
+
+def _hole_of(mesh, curve) -> int | None:
+    """The hole (index into ``mesh.hole_loops``) an expanding curve's pads open in."""
+    if not curve.expanding or not len(curve.nodes):
+        return None
+    node = int(curve.nodes[0])
+    return next((k for k, lp in enumerate(mesh.hole_loops) if node in set(lp.tolist())), None)
+
+
+def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
+    """Up to ``n`` axes of the escape path at σ* — the start, the saddle, the end and
+    evenly between — each solved at σ*: ``(index on the path, curve, state)``."""
+    path = result.escape_path
+    if not path or result.sigma_star is None:
+        return []
+    k = len(path)
+    idx = set(np.linspace(0, k - 1, max(min(n, k), 1)).round().astype(int).tolist())
+    keep = {0, k - 1}
+    if result.saddle is not None:
+        hit = [i for i, a in enumerate(path) if np.isclose(a.angle, result.saddle.angle)
+               and np.isclose(a.offset, result.saddle.offset)]
+        keep |= set(hit[:1])
+    idx |= keep
+    while len(idx) > max(n, len(keep)):      # keep the start, the end and the saddle
+        rest = sorted(idx - keep)
+        idx.discard(rest[len(rest) // 2])
+    solver, pad, sig = result.solver, result.pad, result.sigma_star
+    hole = _hole_of(solver.mesh, result.start_curve)
+    out = []
+    for i in sorted(idx):
+        curve = solver.curve(path[i], pad, sig, hole)
+        out.append((i, curve, curve_state(solver, curve, sig, result.limit.critical_distance)))
+    return out
+
+
+def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0):
+    """The escape path at σ* as a strip of small pictures: the part deformed on each of up
+    to ``n`` axes along it (the start, the saddle — title in red —, the end), the pads,
+    the grasp energy ``U`` (mJ) in each title, one strain colour scale for all.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        ``None`` when there is no escape path (no barrier, or ``U_A`` infinite).
+    """
+    from matplotlib.colors import Normalize
+
+    from .mesh import new_figure
+
+    states = escape_states(result, n)
+    if not states:
+        return None
+    check_scale(scale)
+    s = 1.0 / length_scale(units)
+    mesh = result.solver.mesh
+    top = max(max(float(st.strain.max()) for _, _, st in states), 1e-300)
+    norm = Normalize(0.0, top)
+    span = np.ptp(mesh.nodes, axis=0)
+    w = 2.6
+    fig, _ = new_figure((w * len(states) + 1.2, min(max(w * span[1] / span[0], 1.0), 4.0) + 1.3))
+    fig.clf()
+    axes = fig.subplots(1, len(states), squeeze=False)[0]
+    pts, pc = [], None
+    sad = result.saddle
+    for ax, (i, curve, st) in zip(axes, states):
+        pc, xy = draw_state(ax, mesh, curve, result.pad, st, units, scale, _pad_depth(result),
+                            norm=norm, pressure=False)
+        pts.append(np.vstack([xy, mesh.nodes * s]))
+        is_saddle = sad is not None and np.isclose(curve.axis.angle, sad.angle) \
+            and np.isclose(curve.axis.offset, sad.offset)
+        ax.set_title(f"{i + 1}/{len(result.escape_path)}: {np.degrees(curve.axis.angle) % 180:.0f}°, "
+                     f"c = {_clean(curve.axis.offset, mesh.diameter) * s:.3g} {units}\n"
+                     f"U = {st.energy * 1e3:.4g} mJ"
+                     + (" (saddle)" if is_saddle else ""), fontsize=8,
+                     color="C3" if is_saddle else "k")
+        ax.set_xticks([])
+        ax.set_yticks([])
+    allp = np.vstack(pts)
+    for ax in axes:
+        _frame(ax, allp)
+    cb = fig.colorbar(pc, ax=list(axes), shrink=0.8, pad=0.02)
+    cb.set_label("averaged strain (m/m)", fontsize=8)
+    fig.suptitle(f"escape path at σ* = {result.sigma_star * s:.4g} {units}: U_A = "
+                 f"{_energy_text(result.U_A)} over the start's U = "
+                 f"{states[0][2].energy * 1e3:.4g} mJ", fontsize=9)
+    return fig
+
+
+def _clean(v: float, size: float) -> float:
+    """A length for a title without floating-point dust (below 1e-6 of ``size``: 0)."""
+    return 0.0 if abs(v) < 1e-6 * size else float(v)
+
+
+def _energy_text(U: float) -> str:
+    return "∞" if not np.isfinite(U) else f"{U * 1e3:.4g} mJ"
+
+
+def plot_convergence(convergence: list[dict], ax=None, units: str = "mm", label: str = ""):
+    """``Q*`` (mJ) and — when the rows have it — ``σ*`` (``units``) against the number of
+    mesh nodes of each level of a refined run (the report's ``convergence`` rows: optimize,
+    a verified plan row, check), on a log axis of nodes. Check's rows have ``U_A`` instead
+    of ``σ*``; it is drawn in its place.
+
+    Parameters
+    ----------
+    convergence : list of dict
+        ``{"nodes", "quality", "sigma_star" | "U_A", ...}`` per level (SI, JSON form:
+        ``None`` for none or infinite).
+    ax : matplotlib Axes, optional
+    units : str
+    label : str
+        Prefix of the legend entries (a plan draws one run per row).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two y axes (left ``Q*``, right ``σ*``); the legend below.
+    """
+    ax, s = figure_axes(ax, (7, 4.5), units)
+    n = np.array([r["nodes"] for r in convergence], float)
+    Q = _nan([r.get("quality") for r in convergence]) * 1e3
+    l1 = ax.plot(n, Q, "-o", color="C0", ms=4, label=f"{label}Q* (mJ)")
+    ax.set_xscale("log")
+    ax.set_xlabel("mesh nodes")
+    ax.set_ylabel("Q* (mJ)", color="C0")
+    twin = getattr(ax, "_dc_twin", None) or ax.twinx()
+    ax._dc_twin = twin
+    if any("sigma_star" in r for r in convergence):
+        y = _nan([r.get("sigma_star") for r in convergence]) * s
+        l2 = twin.plot(n, y, "--s", color="C1", ms=4, label=f"{label}σ* ({units})")
+        twin.set_ylabel(f"σ* ({units})", color="C1")
+    else:
+        y = _nan([r.get("U_A") for r in convergence]) * 1e3
+        l2 = twin.plot(n, y, "--s", color="C1", ms=4, label=f"{label}U_A (mJ)")
+        twin.set_ylabel("U_A (mJ)", color="C1")
+    ax.grid(alpha=0.3)
+    ax.set_title(f"convergence over {len(convergence)} mesh levels", fontsize=9)
+    hs = ax.get_legend_handles_labels()
+    ht = twin.get_legend_handles_labels()
+    _ = l1, l2
+    ax.legend(hs[0] + ht[0], hs[1] + ht[1], loc="upper center", bbox_to_anchor=(0.5, -0.16),
+              ncol=2, fontsize=8, frameon=False)
     return ax.figure
 
 
 def plot_pad_plan(plan, mesh, ax=None, units: str = "mm", n: int = 5):
-    """The best ``n`` grasp axes of a pad plan drawn on the part, ranked."""
+    """The best ``n`` grasp axes of a pad plan on the part at rest: each axis as the chord
+    between its rest contact points, ranked, verified rows solid and screened ones
+    dashed (the grasps themselves, deformed at σ*, are :func:`plot_pad_top_grasps`)."""
     ax, s = figure_axes(ax, (6, 6), units)
     _outline(ax, mesh, s)
     for k, row in enumerate(plan.rows[:n]):
         if row["quality"] <= 0:
             break
         c = np.asarray(row["contacts"]) * s
-        col = f"C{k % 10}"
-        ax.plot(c[:, 0], c[:, 1], "--o", color=col, lw=1, ms=4,
-                label=f"#{k + 1}: {np.degrees(row['angle']) % 180:.0f}°, Q* = {row['quality'] * 1e3:.3g} mJ"
-                      f" ({row['verdict']})")
-        res = next((r for r in plan.top if np.allclose(r.contacts * s, c)), None)
-        if res is not None and res.sigma_star is not None:   # the gripper pose at σ*
-            draw_pads(ax, res, res.sigma_star, units, color=col, alpha=0.55)
-    ax.set_aspect("equal")
+        ax.plot(c[:, 0], c[:, 1], "-o" if row["verified"] else "--o", color=f"C{k % 10}",
+                lw=1.5, ms=4, zorder=4,
+                label=f"#{k + 1}: {np.degrees(row['angle']) % 180:.0f}°, Q* = "
+                      f"{row['quality'] * 1e3:.3g} mJ ({row['verdict']})")
+        ax.annotate(f"#{k + 1}", c.mean(axis=0), color=f"C{k % 10}", fontsize=8,
+                    fontweight="bold", xytext=(3, 3), textcoords="offset points")
+    _frame(ax, mesh.nodes * s)
     ax.set_xlabel(f"x ({units})")
     ax.set_ylabel(f"y ({units})")
-    ax.set_title("best grasp axes (pads at σ* for the verified ones)")
+    ax.set_title("best grasp axes (contact chords at rest; solid: verified)", fontsize=9)
     if ax.get_legend_handles_labels()[0]:
         legend_outside(ax)
     return ax.figure
 
 
-def save_pad_plots(result, mesh, out_dir: str | Path, units: str = "mm") -> list[Path]:
-    """Write ``quality.png`` and ``grasp.png`` into ``out_dir``; return the paths."""
-    def grasp(res, ax, units):
-        return plot_pad_grasp(res, mesh, ax=ax, units=units)
+def _plan_cells(plan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The plan's grid as cell edges in angle (deg) and offset (m) and, per cell, the
+    screened (lattice) quality (J; ``nan`` where the pads miss the part)."""
+    g = plan.grid
+    n_off = g.j_max - g.j_min + 1
+    M = np.full((n_off, g.n_angles), np.nan)
+    for r in plan.rows:
+        i = int(round((r["angle"] - g.angle0) / g.d_angle)) % g.n_angles
+        j = int(round((r["offset"] - g.offset0) / g.d_offset)) - g.j_min
+        if 0 <= j < n_off:
+            M[j, i] = r.get("lattice_quality", r["quality"])
+    th = np.degrees(g.angle0 + (np.arange(g.n_angles + 1) - 0.5) * g.d_angle)
+    c = g.offset0 + (np.arange(g.j_min, g.j_max + 2) - 0.5) * g.d_offset
+    return th, c, M
 
-    return save_plots(result, out_dir, units, (("quality.png", plot_pad_quality, (7, 4.5)),
-                                               ("grasp.png", grasp, (6, 6))))
+
+def plot_pad_quality_map(plan, ax=None, units: str = "mm"):
+    """Quality of every grasp axis over (angle θ, offset c from the area centroid): the
+    screened (lattice) ``Q`` in mJ on a log colour scale
+    (:func:`~deformclosure.plotting.grasp.quality_color_range` from the least positive
+    ``Q``, at most four decades below the best), axes that cannot hold
+    light grey, axes the pads miss white; the verified rows marked by their verdict
+    (held, undecided, not held), the other candidates dotted, the plan's chosen axes
+    (``top``) numbered. How far the colour stays high around a chosen axis is how much
+    positioning error it tolerates.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Colour bar on the right, legend below the axes.
+    """
+    import matplotlib
+    from matplotlib.colors import LogNorm
+
+    from .grasp import quality_color_range
+
+    ax, s = figure_axes(ax, (7.5, 6), units)
+    th, c, M = _plan_cells(plan)
+    rng = quality_color_range(M[np.isfinite(M)], percentile=0.0)   # every holding axis
+    cmap = matplotlib.colormaps["magma"].with_extremes(under="0.85", bad="white")
+    if rng is None:
+        pc = ax.pcolormesh(th, c * s, np.where(np.isnan(M), np.nan, -1.0), cmap=cmap,
+                           vmin=0.0, vmax=1.0, shading="flat")
+        label = "quality Q (mJ): no axis holds"
+    else:
+        lo, hi = rng[0] * 1e3, rng[1] * 1e3
+        Mc = np.where(M > 0, M * 1e3, np.where(np.isnan(M), np.nan, lo * 1e-3))
+        pc = ax.pcolormesh(th, c * s, Mc, cmap=cmap, shading="flat",
+                           norm=LogNorm(vmin=lo, vmax=hi))
+        label = "screened quality Q (mJ, log scale)"
+    ax.figure.colorbar(pc, ax=ax, label=label, extend="min", shrink=0.85)
+    styles = {"held": ("*", "C2", 12), "undecided": ("D", "C1", 7), "not held": ("X", "C0", 8)}
+    shown = set()
+    for r in plan.rows:
+        x, y = np.degrees(r["angle"]) % 180.0, r["offset"] * s
+        if r["verified"]:
+            m, col, ms = styles[r["verdict"]]
+            lab = f"verified: {r['verdict']}"
+            ax.plot([x], [y], m, color=col, mec="k", ms=ms, zorder=5,
+                    label=None if lab in shown else lab)
+            shown.add(lab)
+        elif r["verdict"] == "candidate":
+            ax.plot([x], [y], ".", color="c", ms=3, zorder=4,
+                    label=None if "candidate" in shown else "candidate (screened, Q > 0)")
+            shown.add("candidate")
+    for k, r in enumerate(plan.held):
+        ax.annotate(f"#{k + 1}", (np.degrees(r["angle"]) % 180.0, r["offset"] * s),
+                    xytext=(6, 6), textcoords="offset points", fontsize=8, color="C2",
+                    fontweight="bold", zorder=6)
+    ax.set_xlim(th[0], th[-1])
+    ax.set_ylim(c[0] * s, c[-1] * s)
+    ax.set_xlabel("axis angle θ (deg)")
+    ax.set_ylabel(f"axis offset c from the area centroid ({units})")
+    ax.set_title(f"grasp axes: {len(plan.held)} held (#: chosen), "
+                 f"{sum(r['verified'] for r in plan.rows)} verified", fontsize=9)
+    if ax.get_legend_handles_labels()[0]:
+        legend_below(ax)
+    return ax.figure
+
+
+def _verified_results(plan) -> list[tuple[int, dict, object]]:
+    """``(rank, row, result)`` of the verified rows whose result the plan keeps."""
+    out = []
+    for k, r in enumerate(plan.rows):
+        if not r["verified"]:
+            continue
+        res = next((t for t in plan.top if np.isclose(t.axis.angle, r["angle"])
+                    and np.isclose(t.axis.offset, r["offset"])), None)
+        if res is not None and getattr(res, "solver", None) is not None:
+            out.append((k, r, getattr(res, "linear", res)))
+    return out
+
+
+def plot_pad_top_grasps(plan, units: str = "mm", n: int = 4, scale: float = 1.0):
+    """The best ``n`` verified grasps of a plan, each deformed at its σ* with the pads
+    where they hold it and its averaged strain (one colour scale), a panel each.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        ``None`` when no row was verified.
+    """
+    from matplotlib.colors import Normalize
+
+    from .mesh import new_figure
+
+    picks = [(k, r, res) for k, r, res in _verified_results(plan)
+             if res.sigma_star is not None][:n]
+    if not picks:
+        return None
+    check_scale(scale)
+    s = 1.0 / length_scale(units)
+    states = [pad_state(res) for _, _, res in picks]
+    top = max(max(float(st.strain.max()) for st in states),
+              max((res.e_L or 0.0) for _, _, res in picks), 1e-300)
+    span = np.ptp(picks[0][2].solver.mesh.nodes, axis=0)
+    w = 3.6
+    fig, _ = new_figure((w * len(picks) + 1.2, min(max(w * span[1] / span[0], 1.2), 5.0) + 1.8))
+    fig.clf()
+    axes = fig.subplots(1, len(picks), squeeze=False)[0]
+    pc = None
+    for ax, (k, r, res), st in zip(axes, picks, states):
+        msh = res.solver.mesh
+        pc, xy = draw_state(ax, msh, res.start_curve, res.pad, st, units, scale,
+                            _pad_depth(res), norm=Normalize(0.0, top))
+        _frame(ax, np.vstack([xy, msh.nodes * s]))
+        ax.set_title(f"#{k + 1} ({r['verdict']}): {np.degrees(r['angle']) % 180:.0f}°, "
+                     f"c = {_clean(r['offset'], msh.diameter) * s:.3g} {units}\n"
+                     f"σ* = {st.sigma * s:.4g} {units}, "
+                     f"F = {st.force:.3g} N, Q* = {r['quality'] * 1e3:.3g} mJ", fontsize=8)
+        ax.set_xlabel(f"x ({units})", fontsize=8)
+    axes[0].set_ylabel(f"y ({units})", fontsize=8)
+    cb = fig.colorbar(pc, ax=list(axes), shrink=0.8, pad=0.02)
+    cb.set_label("averaged strain (m/m)", fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.45, 0.02), ncol=3,
+               fontsize=8, frameon=False)
+    fig.suptitle("best verified grasps, deformed at σ*" + ("" if scale == 1
+                                                           else f" (displacements × {scale:g})"),
+                 fontsize=9)
+    return fig
+
+
+def plot_plan_convergence(plan, ax=None, units: str = "mm", n: int = 4):
+    """``Q*`` and ``σ*`` against the mesh nodes of each verified row refined on several
+    levels (:func:`plot_convergence`, one run per row); ``None`` without any."""
+    runs = [(k, r) for k, r in enumerate(plan.rows)
+            if r["verified"] and len(r.get("convergence") or ()) > 1][:n]
+    if not runs:
+        return None
+    ax, _ = figure_axes(ax, (7.5, 4.8), units)
+    for k, r in runs:
+        plot_convergence(r["convergence"], ax=ax, units=units, label=f"#{k + 1} ")
+    for i, line in enumerate(ax.get_lines()):
+        line.set_color(f"C{i % 10}")
+    for i, line in enumerate(ax._dc_twin.get_lines()):
+        line.set_color(f"C{i % 10}")
+    ax.set_title(f"convergence of {len(runs)} verified grasps", fontsize=9)
+    return ax.figure
+
+
+def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: float = 1.0,
+                   convergence: list | None = None) -> list[Path]:
+    """Write the pictures of a pad grasp for ``--plot target``
+    (:func:`~deformclosure.plotting.mesh.plot_path`): ``grasp`` (deformed at σ*),
+    ``quality`` (``U``, ``U_A``, ``U_L``, ``Q`` against σ), ``force`` (``F(σ)``),
+    ``escape`` (the escape path's strip, when there is one) and ``convergence`` (when
+    ``convergence`` has several levels). Returns the paths written."""
+    from .mesh import new_figure
+
+    check_scale(scale)
+    figs = []
+    fig, ax = new_figure((6.5, 6.5))
+    figs.append(("grasp", plot_pad_grasp(result, mesh, ax=ax, units=units, scale=scale)))
+    fig, ax = new_figure((7, 4.5))
+    figs.append(("quality", plot_pad_quality(result, ax=ax, units=units)))
+    fig, ax = new_figure((7, 4.5))
+    figs.append(("force", plot_force_squeeze(result, ax=ax, units=units)))
+    strip = plot_escape_strip(result, units=units, scale=scale)
+    if strip is not None:
+        figs.append(("escape", strip))
+    if convergence is not None and len(convergence) > 1:
+        fig, ax = new_figure((7, 4.5))
+        figs.append(("convergence", plot_convergence(convergence, ax=ax, units=units)))
+    paths = []
+    for name, f in figs:
+        path = plot_path(target, name)
+        save_figure(f, path)
+        paths.append(path)
+    return paths
+
+
+def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
+                        scale: float = 1.0) -> list[Path]:
+    """Write the pictures of a pad plan for ``--plot target``: ``quality_map`` (θ, c),
+    ``top_axes`` (chords on the part), ``top_grasps`` (the verified grasps deformed at σ*)
+    and ``convergence`` (verified rows refined on several levels), the last two when
+    there is something to draw. Returns the paths written."""
+    from .mesh import new_figure
+
+    check_scale(scale)
+    figs = []
+    fig, ax = new_figure((7.5, 6))
+    figs.append(("quality_map", plot_pad_quality_map(plan, ax=ax, units=units)))
+    fig, ax = new_figure((6, 6))
+    figs.append(("top_axes", plot_pad_plan(plan, mesh, ax=ax, units=units)))
+    tops = plot_pad_top_grasps(plan, units=units, scale=scale)
+    if tops is not None:
+        figs.append(("top_grasps", tops))
+    fig, ax = new_figure((7.5, 4.8))
+    conv = plot_plan_convergence(plan, ax=ax, units=units)
+    if conv is not None:
+        figs.append(("convergence", conv))
+    else:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
+    paths = []
+    for name, f in figs:
+        path = plot_path(target, name)
+        save_figure(f, path)
+        paths.append(path)
+    return paths

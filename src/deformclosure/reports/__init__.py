@@ -73,5 +73,7 @@ def run(command: str, part, params: dict | None = None, *, progress=None, notify
         if opt.required and full.get(opt.name) is None:
             raise DeformClosureError(f"{opt.flags[-1]}: required for {command}; see "
                                      f"'deformclosure {command} --help'")
+        if opt.kind == "plot" and full.get(opt.name) is not None:   # before any work
+            opt.convert(str(full[opt.name]), opt.flags[-1])
     module = importlib.import_module(f".{COMMANDS[command]}", __name__)
     return module.run(part, full, progress=progress, notify=notify)

@@ -36,8 +36,9 @@ def _writer(rep: Report, report: bool) -> list[str]:
     write_report(rep, report)
     if not rep.params["plot"]:
         return []
-    from ..plotting.mesh import save_figure
+    from ..plotting.mesh import plot_path, save_figure
     from ..plotting.part import plot_outline
 
-    save_figure(plot_outline(rep.result), rep.params["plot"])
-    return [str(rep.params["plot"])]
+    path = plot_path(rep.params["plot"], "outline", single=True)
+    save_figure(plot_outline(rep.result), path)
+    return [str(path)]

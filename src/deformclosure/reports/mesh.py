@@ -52,10 +52,11 @@ def _writer(units: str):
                                     "--material when reading the mesh back (.json, .vtu and "
                                     ".vtk keep it)")
         if rep.params.get("plot"):
-            from ..plotting.mesh import save_mesh_plot
+            from ..plotting.mesh import plot_path, save_mesh_plot
 
-            save_mesh_plot(rep.result, rep.params["plot"], units=units)
-            written.append(str(rep.params["plot"]))
+            path = plot_path(rep.params["plot"], "mesh", single=True)
+            save_mesh_plot(rep.result, path, units=units)
+            written.append(str(path))
         return written
 
     return write

@@ -18,9 +18,12 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     given); lengths in ``units`` (default the part's); ``eps`` in J."""
     from ..fields import check_field_path
 
+    from ..plotting.pads import check_scale
+
     p = params
     if p["export_fields"] is not None:
         check_field_path(p["export_fields"])
+    p["scale"] = check_scale(p.get("scale", 1.0))
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
     _check_friction_request(p, model)
     if p.get("elasticity") == "neo-hookean" and model == "paper":
@@ -289,7 +292,9 @@ def _pads_writer(inp):
 
             # the pads' pictures draw the linear model's state (finite strain: its twin)
             written += save_pad_plots(getattr(fine, "linear", fine), inp.mesh, p["plot"],
-                                      units=inp.unit if inp.unit != "m" else "mm")
+                                      units=inp.unit if inp.unit != "m" else "mm",
+                                      scale=p.get("scale", 1.0),
+                                      convergence=rep.data.get("convergence"))
         return [str(w) for w in written]
 
     return write

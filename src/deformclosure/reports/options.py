@@ -13,7 +13,7 @@ An option's *role* says what it is to a batch job:
     a file or folder the command writes (``-o``, ``--plot``, ``--export-fields``); not in
     the key.
 ``display``
-    changes only what is printed (``--quiet``); not in the key.
+    changes only what is printed or drawn (``--quiet``, ``--scale``); not in the key.
 
 This module imports nothing heavy (no numpy, no click at import time): ``deformclosure
 --help`` reads it.
@@ -51,7 +51,9 @@ class Opt:
         Spellings on the command line (``("--pad-radius",)``, ``("-o", "--output")``).
     kind : str
         ``"float"``, ``"int"``, ``"str"``, ``"flag"`` (no value), ``"choice"``,
-        ``"file"`` (a file path) or ``"folder"`` (a folder path).
+        ``"file"`` (a file path), ``"folder"`` (a folder path) or ``"plot"`` (``--plot``:
+        a folder, or a file whose suffix — png, svg, pdf — sets the format of every
+        figure; :func:`deformclosure.outputs.plot_target`, checked as it is parsed).
     default : object
         Value when absent (``None``: not given).
     help : str
@@ -93,6 +95,11 @@ class Opt:
             if self.kind == "float" and math.isnan(v):
                 raise DeformClosureError(f"{shown}: {text!r} is not a number")
             return v
+        if self.kind == "plot":
+            from ..outputs import plot_target
+
+            plot_target(text, shown)
+            return text
         if self.kind == "choice" and text not in self.choices:
             raise DeformClosureError(f"{shown} = {text!r}: choose one of {', '.join(self.choices)}")
         return text
@@ -138,6 +145,22 @@ _DISPLAY = (
 )
 _FIELDS = ("--export-fields",)
 
+_PLOT_FORMS = ("a folder (PNG figures) or a .png/.svg/.pdf file whose suffix sets the format "
+               "of every figure (out/fig.svg writes out/fig_<figure>.svg)")
+
+
+def _plot(what: str, single: bool = False) -> Opt:
+    """``--plot``: a folder or a picture file (:func:`deformclosure.outputs.plot_target`)."""
+    where = ("a .png/.svg/.pdf file (its suffix sets the format), or a folder (PNG)"
+             if single else _PLOT_FORMS)
+    return Opt("plot", ("--plot",), "plot", role="output", metavar="PATH",
+               help=f"{what}: {where}.")
+
+
+_SCALE = Opt("scale", ("--scale",), "float", 1.0, role="display", show_default=True,
+             help="pads pictures (--plot): draw the displacements this many times their size "
+                  "(1 = true scale; the pads move with the part).")
+
 
 def _pads(angles: int, offsets: int) -> tuple[Opt, ...]:
     """The pad model's options shared by ``optimize`` and ``plan``."""
@@ -161,8 +184,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="Override the part's mesh.max_area (in the part's units²)."),
         Opt("min_angle", ("--min-angle",), "float",
             help="Override the part's mesh.min_angle (degrees, <= 34)."),
-        Opt("plot", ("--plot",), "file", role="output",
-            help="Write a picture of the mesh (PNG/SVG)."),
+        _plot("Write a picture of the mesh", single=True),
         _MATERIAL, _UNITS,
         *_DISPLAY,
     ),
@@ -195,7 +217,9 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
             help="paper model: jaw contact width (0 = point jaws)."),
         _MATERIAL, _UNITS, _MAX_AREA,
         Opt("output", ("-o", "--output"), "file", role="output", help="JSON report (SI units)."),
-        Opt("plot", ("--plot",), "folder", role="output", help="Folder for the plots."),
+        _plot("The pictures (pads: deformed part at sigma* with strain and contact pressure, "
+              "Q and force against sigma, escape path, convergence)"),
+        _SCALE,
         Opt("export_graph", ("--export-graph",), "file", role="output",
             help="paper model: write the contact graph (JSON)."),
         Opt("export_fields", _FIELDS, "file", role="output",
@@ -207,8 +231,8 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("fingers", ("--fingers",), "file", role="input", required=True,
             help="Finger file (JSON, see below)."),
         _OUTPUT,
-        Opt("plot", ("--plot",), "file", role="output",
-            help="Draw the part, fingers, contact forces and escaping motion (PNG/SVG)."),
+        _plot("Draw the part, fingers, contact forces, escaping motion and escape path",
+              single=True),
         Opt("grid_steps", ("--grid-steps",), "int", 48, show_default=True,
             help="Release landscape: translation steps per part diameter (at most half the "
                  "smallest disc radius per step)."),
@@ -246,7 +270,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("units", ("--units",), "choice", choices=("m", "cm", "mm", "in"),
             help="Units of --at and --extent, and of a meshio file's coordinates."),
         Opt("output", ("-o", "--output"), "file", role="output", help="Write .npz or .json."),
-        Opt("plot", ("--plot",), "file", role="output", help="Draw the slice (PNG/SVG)."),
+        _plot("Draw the slice", single=True),
         Opt("export_fields", _FIELDS, "file", role="output",
             help="Write the slice as an image for ParaView (.vtu): energy, D_free, D_T and "
                  "each D-obstacle over the positions of the moving node."),
@@ -281,8 +305,9 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("units", ("--units",), "str", help="Unit of lengths given here (m, cm, mm, in)."),
         _MAX_AREA,
         Opt("output", ("-o", "--output"), "file", role="output", help="JSON report (SI units)."),
-        Opt("plot", ("--plot",), "folder", role="output",
-            help="Folder for the quality map and top grasps."),
+        _plot("The pictures (pads: quality map over (angle, offset), top grasps deformed at "
+              "sigma*, convergence of the verified ones)"),
+        _SCALE,
         *_DISPLAY,
     ),
     "import": (
@@ -298,7 +323,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("material", ("--material",), "str", role="file_or_json", metavar="FILE|JSON",
             help="Material: a JSON file or inline JSON (youngs_modulus Pa, poisson_ratio, "
                  "thickness, elastic_limit_strain [, plane, critical_distance, units])."),
-        Opt("plot", ("--plot",), "file", role="output", help="Draw the imported outline (PNG/SVG)."),
+        _plot("Draw the imported outline", single=True),
         *_DISPLAY,
     ),
 }

@@ -15,7 +15,10 @@ __all__ = ["run"]
 
 def run(part, params: dict, progress=None, notify=None) -> Report:
     """Plan the grasps of ``part``; ``top`` best refined exactly; lengths in ``units``."""
+    from ..plotting.pads import check_scale
+
     p = params
+    p["scale"] = check_scale(p.get("scale", 1.0))
     if p["top"] < 0:
         raise GraspError(f"--top = {p['top']}: must be >= 0")
     if p["verify"] < 0:
@@ -126,16 +129,11 @@ def _pads_writer(rep: Report, report: bool) -> list[str]:
     res, inp = rep.result
     if not rep.params["plot"]:
         return []
-    from pathlib import Path
+    from ..plotting.pads import save_pad_plan_plots
 
-    from ..plotting.mesh import save_figure
-    from ..plotting.pads import plot_pad_plan
-
-    out = Path(rep.params["plot"])
-    out.mkdir(parents=True, exist_ok=True)
-    save_figure(plot_pad_plan(res, inp.mesh, units=inp.unit if inp.unit != "m" else "mm"),
-                out / "top_axes.png")
-    return [str(out / "top_axes.png")]
+    return [str(w) for w in save_pad_plan_plots(res, inp.mesh, rep.params["plot"],
+                                                units=inp.unit if inp.unit != "m" else "mm",
+                                                scale=rep.params.get("scale", 1.0))]
 
 
 # ----------------------------------------------------------------------------- paper

@@ -83,9 +83,11 @@ def _writer(rep: Report, report: bool) -> list[str]:
         written.append(str(write_slice_fields(p["export_fields"], res)))
     if p["plot"]:
         from ..plotting.dspace import plot_slice
-        from ..plotting.mesh import new_figure, save_figure
+        from ..plotting.mesh import new_figure, plot_path, save_figure
 
         fig, ax = new_figure()
         plot_slice(res, mesh=inp.mesh, fingers=fingers, ax=ax, units=inp.unit)
-        save_figure(fig, p["plot"])
+        path = plot_path(p["plot"], "slice", single=True)
+        save_figure(fig, path)
+        written.append(str(path))
     return written
