@@ -142,7 +142,7 @@ def plot_energy_landscape(analysis, ax=None, units: str = "mm", sigma: float | N
 def save_grasp_plots(analysis, out_dir: str | Path, units: str = "mm") -> list[Path]:
     """Write ``quality``, ``deformed`` and ``landscape`` for ``--plot out_dir`` (a folder of
     PNGs, or a .png/.svg/.pdf file setting the format and the names' stem,
-    :func:`~deformclosure.plotting.mesh.plot_path`)."""
+    :func:`~deformclosure.plotting.mesh.figure_path`)."""
     return save_plots(analysis, out_dir, units, (("quality.png", plot_quality_curve, (7, 4.5)),
                                                  ("deformed.png", plot_deformed_grasp, (6, 6)),
                                                  ("landscape.png", plot_energy_landscape, (6.5, 5.5))))

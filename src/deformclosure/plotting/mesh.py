@@ -9,7 +9,7 @@ import numpy as np
 from ..units import length_scale
 
 __all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure", "figure_axes", "save_plots",
-           "plot_path", "legend_outside", "legend_below", "side_colorbar"]
+           "figure_path", "legend_outside", "legend_below", "side_colorbar"]
 
 
 def new_figure(figsize=(6, 6)):
@@ -32,20 +32,20 @@ def figure_axes(ax, figsize, units: str):
 
 def save_plots(obj, target: str | Path, units: str, specs) -> list[Path]:
     """Draw ``fn(obj, ax=ax, units=units)`` on a new figure of ``size`` and save it as
-    figure ``name`` of ``--plot target`` (:func:`plot_path`) for every ``(name, fn,
+    figure ``name`` of ``--plot target`` (:func:`figure_path`) for every ``(name, fn,
     size)`` of ``specs`` (a suffix on ``name`` is dropped: the target sets the format);
     return the paths."""
     paths = []
     for name, fn, size in specs:
         fig, ax = new_figure(size)
         fn(obj, ax=ax, units=units)
-        path = plot_path(target, Path(name).stem)
+        path = figure_path(target, Path(name).stem)
         save_figure(fig, path)
         paths.append(path)
     return paths
 
 
-def plot_path(target: str | Path, name: str, single: bool = False) -> Path:
+def figure_path(target: str | Path, name: str, single: bool = False) -> Path:
     """The file of figure ``name`` for ``--plot target``
     (:func:`deformclosure.outputs.plot_file`: a folder of PNGs, or ``dir/stem.svg`` →
     ``dir/stem_<name>.svg``), its folder created."""

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..units import length_scale
 from .grasp import quality_lines, sigma_marks
-from .mesh import (figure_axes, legend_below, legend_outside, plot_path, save_figure,
+from .mesh import (figure_axes, legend_below, legend_outside, figure_path, save_figure,
                    side_colorbar)
 
 __all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots",
@@ -705,7 +705,7 @@ def plot_plan_convergence(plan, ax=None, units: str = "mm", n: int = 4):
 def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: float = 1.0,
                    convergence: list | None = None) -> list[Path]:
     """Write the pictures of a pad grasp for ``--plot target``
-    (:func:`~deformclosure.plotting.mesh.plot_path`): ``grasp`` (deformed at σ*),
+    (:func:`~deformclosure.plotting.mesh.figure_path`): ``grasp`` (deformed at σ*),
     ``quality`` (``U``, ``U_A``, ``U_L``, ``Q`` against σ), ``force`` (``F(σ)``),
     ``escape`` (the escape path's strip, when there is one) and ``convergence`` (when
     ``convergence`` has several levels). Returns the paths written."""
@@ -727,7 +727,7 @@ def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: f
         figs.append(("convergence", plot_convergence(convergence, ax=ax, units=units)))
     paths = []
     for name, f in figs:
-        path = plot_path(target, name)
+        path = figure_path(target, name)
         save_figure(f, path)
         paths.append(path)
     return paths
@@ -760,7 +760,7 @@ def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
         plt.close(fig)
     paths = []
     for name, f in figs:
-        path = plot_path(target, name)
+        path = figure_path(target, name)
         save_figure(f, path)
         paths.append(path)
     return paths

@@ -315,10 +315,10 @@ def _writer(rep: Report, report: bool) -> list[str]:
                                 critical_distance_of(inp.mesh))
     if p["plot"]:
         from ..plotting.escape import plot_check_and_escape
-        from ..plotting.mesh import plot_path, save_figure
+        from ..plotting.mesh import figure_path, save_figure
 
         units = inp.part.units if inp.part is not None else "m"
-        path = plot_path(p["plot"], "check", single=True)
+        path = figure_path(p["plot"], "check", single=True)
         save_figure(plot_check_and_escape(inp.mesh, res, rel, fingers, units=units), path)
         written.append(path)
     return [str(w) for w in written]

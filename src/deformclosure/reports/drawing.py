@@ -36,9 +36,9 @@ def _writer(rep: Report, report: bool) -> list[str]:
     write_report(rep, report)
     if not rep.params["plot"]:
         return []
-    from ..plotting.mesh import plot_path, save_figure
+    from ..plotting.mesh import figure_path, save_figure
     from ..plotting.part import plot_outline
 
-    path = plot_path(rep.params["plot"], "outline", single=True)
+    path = figure_path(rep.params["plot"], "outline", single=True)
     save_figure(plot_outline(rep.result), path)
     return [str(path)]

@@ -52,9 +52,9 @@ def _writer(units: str):
                                     "--material when reading the mesh back (.json, .vtu and "
                                     ".vtk keep it)")
         if rep.params.get("plot"):
-            from ..plotting.mesh import plot_path, save_mesh_plot
+            from ..plotting.mesh import figure_path, save_mesh_plot
 
-            path = plot_path(rep.params["plot"], "mesh", single=True)
+            path = figure_path(rep.params["plot"], "mesh", single=True)
             save_mesh_plot(rep.result, path, units=units)
             written.append(str(path))
         return written

@@ -83,11 +83,11 @@ def _writer(rep: Report, report: bool) -> list[str]:
         written.append(str(write_slice_fields(p["export_fields"], res)))
     if p["plot"]:
         from ..plotting.dspace import plot_slice
-        from ..plotting.mesh import new_figure, plot_path, save_figure
+        from ..plotting.mesh import new_figure, figure_path, save_figure
 
         fig, ax = new_figure()
         plot_slice(res, mesh=inp.mesh, fingers=fingers, ax=ax, units=inp.unit)
-        path = plot_path(p["plot"], "slice", single=True)
+        path = figure_path(p["plot"], "slice", single=True)
         save_figure(fig, path)
         written.append(str(path))
     return written
