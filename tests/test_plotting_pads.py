@@ -1,0 +1,387 @@
+"""The pads pictures (issue 24 items 1-3) on figure objects, Agg backend: the deformed
+part's strain colours against the averaged strains computed here by another route, the
+pads touching the deformed part, the contact pressure, the frame on the part, the
+force-squeeze curve, the escape strip's energies against U_A, the plan's (θ, c) map and
+top grasps, the convergence plot; and ``--plot`` formats (svg/pdf magic bytes, an unknown
+suffix refused in one line before any analysis)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+import shapely  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
+from matplotlib.quiver import Quiver  # noqa: E402
+
+import deformclosure as dc  # noqa: E402
+from deformclosure.errors import DeformClosureError  # noqa: E402
+from deformclosure.pads import GraspAxis, Pad  # noqa: E402
+from deformclosure.pads.optimize import optimize_pads  # noqa: E402
+from deformclosure.planning.pads import plan_pads  # noqa: E402
+from deformclosure.plotting import pads as pp  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+MM = 1e-3
+
+
+@pytest.fixture(scope="module")
+def notched():
+    """The notched bar on 300 nodes, round 2 mm pads seated in its notches (about 1 s): a
+    held grasp with a finite barrier, so an escape path."""
+    part = dc.notched_part()
+    part = replace(part, mesh_options=replace(part.mesh_options, max_area=1e-6))
+    mesh = dc.mesh_part(part)
+    res = optimize_pads(mesh, GraspAxis(np.pi / 2, -0.015), Pad(0.0, 2e-3), n_angles=8,
+                        n_offsets=8, noise=False)
+    assert res.verdict == "held" and res.escape_path and np.isfinite(res.U_A)
+    plan = plan_pads(mesh, Pad(0.0, 2e-3), n_angles=6, n_offsets=16, n_sigma=16, top=1)
+    return {"part": part, "mesh": mesh, "res": res, "plan": plan}
+
+
+@pytest.fixture(autouse=True)
+def _close():
+    plt.close("all")
+    yield
+    plt.close("all")
+
+
+def _strain_collection(ax) -> PolyCollection:
+    cols = [c for c in ax.collections if isinstance(c, PolyCollection) and c.get_array() is not None]
+    assert len(cols) == 1, ax.collections
+    return cols[0]
+
+
+def _independent_strains(res) -> np.ndarray:
+    """SPEC §6's measure per element, by the elasticity module's own functions on the
+    state of ``PadGraspResult.state_at`` (not the pictures' route through the fields)."""
+    from deformclosure.elasticity.critical_distance import averaged_strain_magnitude
+    from deformclosure.elasticity.strain import element_strains
+
+    mesh = res.solver.mesh
+    u = res.state_at(res.sigma_star, "s").displacement
+    return averaged_strain_magnitude(mesh, element_strains(mesh, np.ravel(u)),
+                                     res.limit.critical_distance)
+
+
+def test_deformed_colours_are_the_averaged_strains(notched):
+    res = notched["res"]
+    fig = pp.plot_pad_grasp(res, units="mm")
+    ax = fig.axes[0]
+    colours = np.asarray(_strain_collection(ax).get_array(), float)
+    np.testing.assert_allclose(colours, _independent_strains(res), rtol=1e-9, atol=1e-15)
+    # its maximum is the strain the report states at σ* (pad_strain_at: a third route)
+    assert colours.max() == pytest.approx(res.strain_at_sigma_star, rel=1e-9)
+
+
+def test_deformed_picture_title_labels_colour_bar(notched):
+    res = notched["res"]
+    fig = pp.plot_pad_grasp(res, units="mm")
+    ax, cax = fig.axes
+    title = ax.get_title()
+    assert f"F = {res.force:.4g} N" in title and f"{res.sigma_star / MM:.4g} mm" in title
+    assert "true scale" in title
+    assert ax.get_xlabel() == "x (mm)" and ax.get_ylabel() == "y (mm)"
+    assert "(m/m)" in cax.get_ylabel() and "e_L" in cax.get_ylabel()
+    # the colour bar's range holds both the largest strain and e_L (marked)
+    lo, hi = _strain_collection(ax).get_clim()
+    assert lo == 0.0 and hi == pytest.approx(max(res.strain_at_sigma_star, res.e_L))
+    labels = ax.get_legend().get_texts()
+    assert {"part at rest", "pads"} <= {t.get_text() for t in labels}
+
+
+def test_frame_is_tight_on_the_deformed_part(notched):
+    res, mesh = notched["res"], notched["mesh"]
+    ax = pp.plot_pad_grasp(res).axes[0]
+    st = pp.pad_state(res)
+    xy = (mesh.nodes + st.displacement) / MM
+    lo, hi = np.minimum(xy.min(0), mesh.nodes.min(0) / MM), np.maximum(xy.max(0), mesh.nodes.max(0) / MM)
+    margin = 0.1 * mesh.diameter / MM
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert lo[0] - margin <= x0 <= lo[0] and hi[0] <= x1 <= hi[0] + margin
+    assert lo[1] - margin <= y0 <= lo[1] and hi[1] <= y1 <= hi[1] + margin
+
+
+def test_pads_touch_the_deformed_part_where_the_path_presses(notched):
+    """Each pressed node of the deformed part lies on a drawn pad's outline (within 10 %
+    of the squeeze: the contact is linearised along the axis) and inside none."""
+    res, mesh = notched["res"], notched["mesh"]
+    ax = pp.plot_pad_grasp(res).axes[0]
+    pads = [shapely.Polygon(p.get_xy()) for p in ax.patches if isinstance(p, Polygon)]
+    assert len(pads) == 2
+    st = pp.pad_state(res)
+    pressed = np.flatnonzero(np.linalg.norm(st.forces, axis=1) > 0)
+    assert len(pressed) >= 2
+    pts = shapely.points((mesh.nodes[pressed] + st.displacement[pressed]) / MM)
+    dist = np.min([shapely.distance(p.exterior, pts) for p in pads], axis=0)
+    assert np.all(dist <= 0.1 * st.delta / MM), dist / (st.delta / MM)
+    assert not any(shapely.contains(p, pts).any() for p in pads)
+
+
+def test_contact_pressure_arrows(notched):
+    res, mesh = notched["res"], notched["mesh"]
+    ax = pp.plot_pad_grasp(res).axes[0]
+    quiv = [c for c in ax.collections if isinstance(c, Quiver)]
+    assert len(quiv) == 1
+    st = pp.pad_state(res)
+    f = np.linalg.norm(st.forces, axis=1)
+    assert quiv[0].N == np.count_nonzero(f)
+    # pressure = normal force / (half the two boundary edges at the node × thickness)
+    e = mesh.boundary_edges
+    trib = np.zeros(mesh.n_nodes)
+    for a, b in e:
+        L = np.linalg.norm(mesh.nodes[a] - mesh.nodes[b])
+        trib[a] += L / 2
+        trib[b] += L / 2
+    p = f[f > 0] / (trib[f > 0] * mesh.material.thickness)
+    np.testing.assert_allclose(st.pressure[f > 0], p, rtol=1e-12)
+    label = quiv[0].get_label()
+    assert label.startswith("contact pressure (max ") and "kPa" in label
+    assert float(label.split("max ")[1].split()[0]) == pytest.approx(p.max() / 1e3, rel=1e-2)
+    # pad A's forces along the axis add up to the grip force of the title
+    c = res.start_curve
+    lam = c.path.multipliers(c.delta(res.sigma_star))
+    on_a = np.unique(c.nodes[(c.pad_of == 0) & (lam > 0)])      # pressed by pad A
+    assert not set(on_a) & set(c.nodes[(c.pad_of == 1) & (lam > 0)])
+    assert float(np.sum(st.forces[on_a] @ res.axis.direction)) == pytest.approx(res.force,
+                                                                                 rel=1e-9)
+
+
+def test_scale_magnifies_the_displacements_and_moves_the_pads(notched):
+    res = notched["res"]
+    outline = {}
+    pads = {}
+    for k in (1.0, 3.0):
+        ax = pp.plot_pad_grasp(res, scale=k).axes[0]
+        outline[k] = [ln.get_xydata() for ln in ax.lines if ln.get_linestyle() == "-"][0]
+        pads[k] = [np.asarray(p.get_xy()) for p in ax.patches]
+        assert ("true scale" in ax.get_title()) == (k == 1.0)
+    st = pp.pad_state(res)
+    ring = np.append(notched["mesh"].loops[0], notched["mesh"].loops[0][0])
+    X = notched["mesh"].nodes[ring] / MM
+    np.testing.assert_allclose(outline[1.0], X + st.displacement[ring] / MM)
+    np.testing.assert_allclose(outline[3.0], X + 3.0 * st.displacement[ring] / MM)
+    # pad B moves by 3 × (δ + t) along −a, pad A by 3 × t
+    a = res.axis.direction
+    shift_a = (pads[3.0][0] - pads[1.0][0]).mean(axis=0) @ a * MM
+    shift_b = (pads[3.0][1] - pads[1.0][1]).mean(axis=0) @ a * MM
+    assert shift_a == pytest.approx(-2.0 * st.translation, rel=1e-9, abs=1e-15)
+    assert shift_b == pytest.approx(-2.0 * (st.delta + st.translation), rel=1e-9)
+    with pytest.raises(DeformClosureError, match="--scale"):
+        pp.plot_pad_grasp(res, scale=0.0)
+
+
+def test_force_squeeze_curve(notched):
+    res = notched["res"]
+    ax = pp.plot_force_squeeze(res).axes[0]
+    curve = [ln for ln in ax.lines if ln.get_label().startswith("$F")][0]
+    sig = np.array(res.curve["sigma"])
+    order = np.argsort(sig)
+    np.testing.assert_allclose(curve.get_xdata(), sig[order] / MM)
+    F = np.array([res.start_curve.axial_force(s) for s in sig[order]])   # by the curve itself
+    np.testing.assert_allclose(curve.get_ydata(), F, rtol=1e-12)
+    star = [ln for ln in ax.lines if ln.get_label().startswith("$\\sigma^*$")][0]
+    assert star.get_xdata()[0] == pytest.approx(res.sigma_star / MM)
+    assert star.get_ydata()[0] == pytest.approx(res.force)
+    labels = " ".join(ln.get_label() for ln in ax.lines)
+    assert "\\sigma_L" in labels and f"{res.sigma_L / MM:.4g}" in labels
+    assert ax.get_ylabel() == "grip force F (N)" and "σ (mm)" in ax.get_xlabel()
+
+
+def test_escape_strip_energies(notched):
+    """The strip's panels are axes of the escape path solved at σ*: the first is the start
+    (the grasp's own energy), the saddle's energy exceeds it by U_A."""
+    res = notched["res"]
+    states = pp.escape_states(res, n=4)
+    idx = [i for i, _, _ in states]
+    assert idx[0] == 0 and idx[-1] == len(res.escape_path) - 1 and len(states) <= 4
+    U = {i: st.energy for i, _, st in states}
+    assert U[0] == pytest.approx(res.start_curve.energy_at(res.sigma_star), rel=1e-12)
+    sad = [i for i, c, _ in states if np.isclose(c.axis.angle, res.saddle.angle)
+           and np.isclose(c.axis.offset, res.saddle.offset)]
+    assert len(sad) == 1
+    assert U[sad[0]] - U[0] == pytest.approx(res.U_A, rel=1e-9)
+    fig = pp.plot_escape_strip(res, n=4)
+    panels = [a for a in fig.axes if a.get_title()]
+    assert len(panels) == len(states)
+    red = [a for a in panels if "saddle" in a.get_title()]
+    assert len(red) == 1 and f"U = {U[sad[0]] * 1e3:.4g} mJ" in red[0].get_title()
+    assert "U_A" in fig._suptitle.get_text()
+    assert any("(m/m)" in a.get_ylabel() for a in fig.axes)            # the shared colour bar
+
+
+def test_escape_strip_is_none_without_a_path(notched):
+    res = replace(notched["res"], escape_path=[])
+    assert pp.plot_escape_strip(res) is None
+    assert not pp.escape_states(res)
+
+
+def test_quality_map_cells_are_the_screened_qualities(notched):
+    plan = notched["plan"]
+    ax = pp.plot_pad_quality_map(plan).axes[0]
+    mesh_col = [c for c in ax.collections if c.get_array() is not None][0]
+    M = np.ma.filled(np.asarray(mesh_col.get_array()).reshape(
+        plan.grid.j_max - plan.grid.j_min + 1, plan.grid.n_angles).astype(float), np.nan)
+    g = plan.grid
+    for r in plan.rows:
+        i = int(round(r["angle"] / g.d_angle)) % g.n_angles      # angle0 = 0 for a plan
+        j = int(round((r["offset"] - g.offset0) / g.d_offset)) - g.j_min
+        q = r.get("lattice_quality", r["quality"])
+        if q > 0:
+            assert M[j, i] == pytest.approx(q * 1e3, rel=1e-12)
+    assert ax.get_xlabel() == "axis angle θ (deg)" and "offset" in ax.get_ylabel()
+    texts = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert "verified: held" in texts
+    held = [ln for ln in ax.lines if ln.get_label() == "verified: held"][0]
+    best = plan.held[0]
+    assert held.get_xdata()[0] == pytest.approx(np.degrees(best["angle"]) % 180)
+    assert held.get_ydata()[0] == pytest.approx(best["offset"] / MM)
+    assert any(t.get_text() == "#1" for t in ax.texts)
+    assert "log scale" in ax.figure.axes[1].get_ylabel()
+
+
+def test_top_grasps_are_drawn_deformed(notched):
+    plan = notched["plan"]
+    fig = pp.plot_pad_top_grasps(plan)
+    panels = [a for a in fig.axes if a.get_title().startswith("#")]
+    verified = [r for r in plan.rows if r["verified"] and r["sigma_star"] is not None]
+    assert len(panels) == len(verified) >= 1
+    res = plan.top[0]
+    colours = np.asarray(_strain_collection(panels[0]).get_array(), float)
+    np.testing.assert_allclose(colours, _independent_strains(res), rtol=1e-9, atol=1e-15)
+    # the deformed outline, not the rest one, carries the pads
+    st = pp.pad_state(res)
+    assert np.abs(st.displacement).max() > 0
+    assert f"F = {res.force:.3g} N" in panels[0].get_title()
+
+
+def test_plan_top_axes_draws_no_pads(notched):
+    """The overview draws the contact chords on the part at rest — no pads at σ* over the
+    undeformed part (issue 24)."""
+    ax = pp.plot_pad_plan(notched["plan"], notched["mesh"]).axes[0]
+    fills = [p for p in ax.patches if isinstance(p, Polygon)]
+    assert len(fills) == 1 + len(notched["mesh"].hole_loops)        # the part's outline only
+
+
+def test_convergence_plot_data():
+    rows = [{"nodes": 100, "quality": 0.010, "sigma_star": 0.0050},
+            {"nodes": 400, "quality": 0.012, "sigma_star": 0.0052},
+            {"nodes": 1600, "quality": 0.0125, "sigma_star": None}]
+    fig = pp.plot_convergence(rows)
+    ax, twin = fig.axes
+    q = ax.lines[0]
+    np.testing.assert_allclose(q.get_xdata(), [100, 400, 1600])
+    np.testing.assert_allclose(q.get_ydata(), [10.0, 12.0, 12.5])
+    s = twin.lines[0]
+    np.testing.assert_allclose(s.get_ydata(), [5.0, 5.2, np.nan])
+    assert ax.get_xscale() == "log" and twin.get_ylabel() == "σ* (mm)"
+    # check's rows: U_A in σ*'s place
+    fig = pp.plot_convergence([{"nodes": 10, "quality": 1e-3, "U_A": 2e-3},
+                               {"nodes": 40, "quality": 1.1e-3, "U_A": None}])
+    assert fig.axes[1].get_ylabel() == "U_A (mJ)"
+
+
+# ----------------------------------------------------------------------------- formats
+
+
+def _cli(args, capsys):
+    from deformclosure.cli.main import main
+
+    rc = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
+
+
+MAGIC = {"svg": (b"<?xml", b"<svg"), "pdf": (b"%PDF",), "png": (b"\x89PNG\r\n\x1a\n",)}
+
+
+def _has_magic(path: Path, fmt: str) -> bool:
+    head = path.read_bytes()[:256]
+    return any(head.startswith(m) or (fmt == "svg" and m in head) for m in MAGIC[fmt])
+
+
+@pytest.mark.parametrize("fmt", ["svg", "pdf"])
+def test_plot_file_suffix_sets_every_figures_format(fmt, tmp_path, capsys):
+    """``optimize --plot out/fig.<fmt>``: every figure as ``out/fig_<name>.<fmt>`` (the
+    folder made), in that format; two uniform levels, so a convergence figure too."""
+    target = tmp_path / "out" / f"fig.{fmt}"
+    rc, out, err = _cli(["optimize", ROOT / "examples" / "notched_bar.json", "--at", "15,0",
+                         "15,12", "--pad-radius", "2", "--refine", "2", "--max-area", "4",
+                         "--grid-angles", "8", "--grid-offsets", "8", "--plot", target, "-q"],
+                        capsys)
+    assert rc == 0, err
+    written = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert {f"fig_{n}.{fmt}" for n in ("grasp", "quality", "force", "convergence")} \
+        <= set(written), written
+    assert all(n.startswith("fig_") and n.endswith(f".{fmt}") for n in written), written
+    for n in written:
+        assert _has_magic(tmp_path / "out" / n, fmt), n
+
+
+def test_plot_folder_still_writes_pngs(tmp_path):
+    from deformclosure.outputs import plot_file
+
+    assert plot_file(tmp_path / "plots", "grasp") == tmp_path / "plots" / "grasp.png"
+    (tmp_path / "a.b").mkdir()
+    assert plot_file(tmp_path / "a.b", "grasp") == tmp_path / "a.b" / "grasp.png"
+    assert plot_file(tmp_path / "c.PDF", "grasp") == tmp_path / "c_grasp.pdf"
+    assert plot_file(tmp_path / "c.svg", "check", single=True) == tmp_path / "c.svg"
+
+
+@pytest.mark.parametrize("command", ["optimize", "plan", "check", "mesh"])
+def test_unknown_plot_suffix_is_one_line_before_any_analysis(command, tmp_path, capsys,
+                                                             monkeypatch):
+    import importlib
+
+    from deformclosure import reports
+
+    module = importlib.import_module(f"deformclosure.reports.{reports.COMMANDS[command]}")
+
+    def no_analysis(*a, **k):
+        raise AssertionError("the analysis ran")
+
+    monkeypatch.setattr(module, "run", no_analysis)
+    args = {"optimize": ["--at", "15,0", "15,12"], "plan": [], "mesh": [],
+            "check": ["--fingers", ROOT / "examples" / "fingers" / "l_shape.json"]}[command]
+    rc, out, err = _cli([command, ROOT / "examples" / "notched_bar.json", *args, "--plot",
+                         tmp_path / "fig.jpg"], capsys)
+    assert rc == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0] == (f"error: --plot {tmp_path / 'fig.jpg'}: unknown picture format '.jpg'; "
+                        "choose .png, .svg or .pdf (or a folder)")
+    assert not (tmp_path / "fig.jpg").exists()
+    # the library and the batch parser refuse it the same way, before the work
+    with pytest.raises(DeformClosureError, match=r"unknown picture format '\.jpg'"):
+        reports.run(command, ROOT / "examples" / "notched_bar.json",
+                    {"plot": "x.jpg", **({"fingers": "f.json"} if command == "check" else {})})
+    with pytest.raises(DeformClosureError, match="choose .png, .svg or .pdf"):
+        reports.parse_argv(command, [*map(str, args), "--plot", "x.tiff"])
+
+
+@pytest.mark.slow
+def test_check_plot_without_escape_path_draws_the_check_and_a_note(tmp_path):
+    """The README's L-shape is held with U_A = ∞: no empty escape panels, a note instead
+    (placement-energy kernels: slow on a cold numba cache)."""
+    from deformclosure import reports
+    from deformclosure.plotting.escape import escape_note, plot_check_and_escape
+
+    rep = reports.run("check", ROOT / "examples" / "l_shape.json",
+                      {"fingers": ROOT / "examples" / "fingers" / "l_shape.json", "refine": 1})
+    res, rel, fingers, inp = rep.result
+    note = escape_note(rel)
+    assert note is not None and "U_A = ∞" in note
+    fig = plot_check_and_escape(inp.mesh, res, rel, fingers, units="mm")
+    assert len(fig.axes) == 1
+    assert note in [t.get_text() for t in fig.axes[0].texts]
+    rep.params["plot"] = str(tmp_path / "check.svg")
+    written = rep.save(report=False)
+    assert written == [str(tmp_path / "check.svg")]
+    assert _has_magic(tmp_path / "check.svg", "svg")
