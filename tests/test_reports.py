@@ -28,6 +28,8 @@ def _value(opt, draw):
         return str(draw(st.integers(-1000, 1000)))
     if opt.kind == "choice":
         return draw(st.sampled_from(opt.choices))
+    if opt.kind == "plot":          # a folder, or a file in a picture format (issue 24)
+        return draw(st.from_regex(r"[a-c][a-c0-3]{0,5}(\.(png|svg|pdf|PDF))?", fullmatch=True))
     return draw(st.from_regex(r"[a-c][a-c0-3,.]{0,7}", fullmatch=True))   # no such file
 
 

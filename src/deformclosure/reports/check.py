@@ -321,6 +321,13 @@ def _writer(rep: Report, report: bool) -> list[str]:
         path = figure_path(p["plot"], "check", single=True)
         save_figure(plot_check_and_escape(inp.mesh, res, rel, fingers, units=units), path)
         written.append(path)
+        conv = rep.data.get("convergence") or []
+        if len(conv) > 1:           # a refined run: U_A and the quality against the nodes
+            from ..plotting.pads import plot_convergence
+
+            path = figure_path(p["plot"], "convergence")
+            save_figure(plot_convergence(conv, units=units), path)
+            written.append(path)
     return [str(w) for w in written]
 
 

@@ -119,7 +119,7 @@ def _writer(rep: Report, report: bool) -> list[str]:
     paths = [out / "mesh.png"]
     for (key, part, *_rest) in cases:
         fine = results[key].finest
-        save_figure(plot_pad_grasp(fine, mesh_part(part), units="mm"), out / f"{key}.png")
+        save_figure(plot_pad_grasp(fine, units="mm"), out / f"{key}.png")
         save_figure(plot_pad_quality(fine, units="mm"), out / f"{key}_quality.png")
         paths += [out / f"{key}.png", out / f"{key}_quality.png"]
     return [str(p) for p in paths + ([out / "report.json"] if report else [])]
