@@ -46,6 +46,25 @@ def notched():
     return {"part": part, "mesh": mesh, "res": res, "plan": plan}
 
 
+@pytest.fixture(scope="module")
+def rhombus():
+    """Round pads opening into the acute corners of a rhombus hole (expanding, held; about
+    0.5 s)."""
+    from deformclosure.pads.contact import hole_containing
+
+    part = dc.Part.from_dict({
+        "name": "plate", "units": "mm", "outer": [[0, 0], [30, 0], [30, 20], [0, 20]],
+        "holes": [[[8, 10], [15, 13], [22, 10], [15, 7]]], "mesh": {"max_area": 0.4},
+        "material": {"youngs_modulus": 2e6, "poisson_ratio": 0.3, "thickness": 1.0,
+                     "elastic_limit_strain": 0.5}})
+    mesh = dc.mesh_part(part)
+    res = optimize_pads(mesh, GraspAxis.through(np.array([8, 10]) * MM, np.array([22, 10]) * MM),
+                        Pad(0.0, MM), hole=hole_containing(mesh, [0.015, 0.010]), n_angles=12,
+                        n_offsets=12, noise=False)
+    assert res.start_curve.expanding and res.verdict == "held" and res.escape_path
+    return {"part": part, "mesh": mesh, "res": res}
+
+
 @pytest.fixture(autouse=True)
 def _close():
     plt.close("all")
@@ -109,10 +128,13 @@ def test_frame_is_tight_on_the_deformed_part(notched):
     assert lo[1] - margin <= y0 <= lo[1] and hi[1] <= y1 <= hi[1] + margin
 
 
-def test_pads_touch_the_deformed_part_where_the_path_presses(notched):
+@pytest.mark.parametrize("case", ["notched", "rhombus"])
+def test_pads_touch_the_deformed_part_where_the_path_presses(case, request):
     """Each pressed node of the deformed part lies on a drawn pad's outline (within 10 %
-    of the squeeze: the contact is linearised along the axis) and inside none."""
-    res, mesh = notched["res"], notched["mesh"]
+    of the squeeze: the contact is linearised along the axis) and inside none — closing
+    on the notched bar, opening in the rhombus hole."""
+    c = request.getfixturevalue(case)
+    res, mesh = c["res"], c["mesh"]
     ax = pp.plot_pad_grasp(res).axes[0]
     pads = [shapely.Polygon(p.get_xy()) for p in ax.patches if isinstance(p, Polygon)]
     assert len(pads) == 2
@@ -195,10 +217,12 @@ def test_force_squeeze_curve(notched):
     assert ax.get_ylabel() == "grip force F (N)" and "σ (mm)" in ax.get_xlabel()
 
 
-def test_escape_strip_energies(notched):
+@pytest.mark.parametrize("case", ["notched", "rhombus"])
+def test_escape_strip_energies(case, request):
     """The strip's panels are axes of the escape path solved at σ*: the first is the start
-    (the grasp's own energy), the saddle's energy exceeds it by U_A."""
-    res = notched["res"]
+    (the grasp's own energy), the saddle's energy exceeds it by U_A (closing and opening
+    pads)."""
+    res = request.getfixturevalue(case)["res"]
     states = pp.escape_states(res, n=4)
     idx = [i for i, _, _ in states]
     assert idx[0] == 0 and idx[-1] == len(res.escape_path) - 1 and len(states) <= 4
