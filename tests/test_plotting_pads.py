@@ -154,7 +154,8 @@ def test_contact_pressure_arrows(notched):
     assert len(quiv) == 1
     st = pp.pad_state(res)
     f = np.linalg.norm(st.forces, axis=1)
-    assert quiv[0].N == np.count_nonzero(f)
+    assert np.count_nonzero(f) <= pp.MAX_PRESSURE_ARROWS
+    assert quiv[0].N == np.count_nonzero(f)              # few pressed nodes: every one
     # pressure = normal force / (half the two boundary edges at the node × thickness)
     e = mesh.boundary_edges
     trib = np.zeros(mesh.n_nodes)
@@ -174,6 +175,24 @@ def test_contact_pressure_arrows(notched):
     assert not set(on_a) & set(c.nodes[(c.pad_of == 1) & (lam > 0)])
     assert float(np.sum(st.forces[on_a] @ res.axis.direction)) == pytest.approx(res.force,
                                                                                  rel=1e-9)
+
+
+def test_pressure_arrows_thin_out_on_fine_meshes(notched):
+    """More pressed nodes than MAX_PRESSURE_ARROWS: evenly many along the boundary, the
+    most pressed one among them."""
+    mesh = notched["mesh"]
+    rng = np.random.default_rng(3)
+    p = np.zeros(mesh.n_nodes)
+    ring = np.concatenate(mesh.loops)
+    p[ring] = rng.uniform(1.0, 2.0, len(ring))
+    pick = pp.pressure_nodes(mesh, p)
+    assert len(pick) <= pp.MAX_PRESSURE_ARROWS and np.argmax(p) in pick
+    assert set(pick) <= set(ring)
+    pos = np.array([np.flatnonzero(ring == k)[0] for k in pick])    # along the loops
+    assert np.ptp(pos) > 0.9 * len(ring) and np.diff(np.sort(pos)).max() < 0.2 * len(ring)
+    few = np.zeros(mesh.n_nodes)
+    few[ring[:5]] = 1.0
+    assert sorted(pp.pressure_nodes(mesh, few)) == sorted(ring[:5])
 
 
 def test_scale_magnifies_the_displacements_and_moves_the_pads(notched):

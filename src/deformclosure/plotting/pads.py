@@ -246,16 +246,36 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
     return pc, xy
 
 
+#: Most pressure arrows drawn: on a fine mesh every ``k``-th pressed node along the
+#: boundary (the most pressed one always), so the arrows stay readable.
+MAX_PRESSURE_ARROWS = 24
+
+
+def pressure_nodes(mesh, pressure: np.ndarray, most: int = MAX_PRESSURE_ARROWS) -> np.ndarray:
+    """The pressed nodes (``pressure > 0``) whose arrows are drawn: all of them, or — more
+    than ``most`` — evenly many along the boundary loops, the most pressed included."""
+    on = np.flatnonzero(pressure > 0)
+    if len(on) <= most:
+        return on
+    order = np.concatenate(mesh.loops)
+    rank = np.full(mesh.n_nodes, len(order))
+    rank[order] = np.arange(len(order))
+    along = on[np.argsort(rank[on], kind="stable")]
+    pick = along[np.linspace(0, len(along) - 1, most - 1).round().astype(int)]
+    return np.union1d(pick, [on[np.argmax(pressure[on])]])
+
+
 def _draw_pressure(ax, mesh, xy: np.ndarray, state: PadState, s: float) -> None:
-    """Contact pressure as arrows along the force on each pressed node, pointing at it,
-    their lengths proportional to the pressure (the longest 12 % of the part's size)."""
+    """Contact pressure as arrows along the force on pressed nodes (at most
+    :data:`MAX_PRESSURE_ARROWS`, :func:`pressure_nodes`), pointing at them, their lengths
+    proportional to the pressure (the longest 7 % of the part's size)."""
     p = state.pressure
-    on = np.flatnonzero(p > 0)
+    on = pressure_nodes(mesh, p)
     if not len(on):
         return
     f = state.forces[on]
     d = f / np.linalg.norm(f, axis=1)[:, None]
-    L = 0.12 * mesh.diameter * s * p[on] / p[on].max()
+    L = 0.07 * mesh.diameter * s * p[on] / p[on].max()
     tail = xy[on] - d * L[:, None]
     ax.quiver(tail[:, 0], tail[:, 1], d[:, 0] * L, d[:, 1] * L, angles="xy",
               scale_units="xy", scale=1, color="C3", width=0.004, zorder=6,
@@ -493,7 +513,8 @@ def plot_convergence(convergence: list[dict], ax=None, units: str = "mm", label:
     n = np.array([r["nodes"] for r in convergence], float)
     Q = _nan([r.get("quality") for r in convergence]) * 1e3
     l1 = ax.plot(n, Q, "-o", color="C0", ms=4, label=f"{label}Q* (mJ)")
-    ax.set_xscale("log")
+    if n.max() > 8 * n.min() or ax.get_xscale() == "log":   # decades of nodes: a log axis
+        ax.set_xscale("log")
     ax.set_xlabel("mesh nodes")
     ax.set_ylabel("Q* (mJ)", color="C0")
     twin = getattr(ax, "_dc_twin", None) or ax.twinx()
