@@ -94,7 +94,7 @@ def save_figure(fig, path: str | Path) -> None:
 
     try:
         with atomic_path(path, "plot") as tmp:
-            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=Path(path).suffix[1:] or "png")
+            fig.savefig(tmp, dpi=150, bbox_inches="tight", format=Path(path).suffix[1:].lower() or "png")
     except DeformClosureError:              # the target itself (outputs.atomic_path), one line
         raise
     except (OSError, ValueError) as err:

@@ -473,9 +473,9 @@ def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0)
         _frame(ax, allp)
     cb = fig.colorbar(pc, ax=list(axes), shrink=0.8, pad=0.02)
     cb.set_label("averaged strain (m/m)", fontsize=8)
-    fig.suptitle(f"escape path at σ* = {result.sigma_star * s:.4g} {units}: U_A = "
+    _title_above(fig, axes, f"escape path at σ* = {result.sigma_star * s:.4g} {units}: U_A = "
                  f"{_energy_text(result.U_A)} over the start's U = "
-                 f"{states[0][2].energy * 1e3:.4g} mJ", fontsize=9)
+                 f"{states[0][2].energy * 1e3:.4g} mJ")
     return fig
 
 
@@ -696,31 +696,56 @@ def plot_pad_top_grasps(plan, units: str = "mm", n: int = 4, scale: float = 1.0)
     axes[0].set_ylabel(f"y ({units})", fontsize=8)
     cb = fig.colorbar(pc, ax=list(axes), shrink=0.8, pad=0.02)
     cb.set_label("averaged strain (m/m)", fontsize=8)
+    _title_above(fig, axes, "best verified grasps, deformed at σ*"
+                 + ("" if scale == 1 else f" (displacements × {scale:g})"))
     handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.45, 0.02), ncol=3,
-               fontsize=8, frameon=False)
-    fig.suptitle("best verified grasps, deformed at σ*" + ("" if scale == 1
-                                                           else f" (displacements × {scale:g})"),
-                 fontsize=9)
+    bottom = min(a.get_position().y0 for a in axes)
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.45, bottom),
+               borderaxespad=4.0, ncol=3, fontsize=8, frameon=False)
     return fig
 
 
 def plot_plan_convergence(plan, ax=None, units: str = "mm", n: int = 4):
-    """``Q*`` and ``σ*`` against the mesh nodes of each verified row refined on several
-    levels (:func:`plot_convergence`, one run per row); ``None`` without any."""
+    """``Q*`` (mJ, solid, left axis) and ``σ*`` (dashed, right axis) against the mesh
+    nodes of the best ``n`` verified rows refined on several levels (their
+    ``convergence`` rows), one colour per row; ``None`` without any."""
     runs = [(k, r) for k, r in enumerate(plan.rows)
             if r["verified"] and len(r.get("convergence") or ()) > 1][:n]
     if not runs:
         return None
-    ax, _ = figure_axes(ax, (7.5, 4.8), units)
-    for k, r in runs:
-        plot_convergence(r["convergence"], ax=ax, units=units, label=f"#{k + 1} ")
-    for i, line in enumerate(ax.get_lines()):
-        line.set_color(f"C{i % 10}")
-    for i, line in enumerate(ax._dc_twin.get_lines()):
-        line.set_color(f"C{i % 10}")
+    from matplotlib.lines import Line2D
+
+    ax, s = figure_axes(ax, (7.5, 4.8), units)
+    twin = ax.twinx()
+    handles = []
+    for c, (k, r) in enumerate(runs):
+        conv = r["convergence"]
+        nodes = np.array([v["nodes"] for v in conv], float)
+        col = f"C{c % 10}"
+        ax.plot(nodes, _nan([v.get("quality") for v in conv]) * 1e3, "-o", color=col, ms=4)
+        twin.plot(nodes, _nan([v.get("sigma_star") for v in conv]) * s, "--s", color=col,
+                  ms=3, alpha=0.8)
+        handles.append(Line2D([], [], color=col, marker="o",
+                              label=f"#{k + 1} ({r['verdict']}): {np.degrees(r['angle']) % 180:.0f}°, "
+                                    f"c = {_clean(r['offset'], 1.0) * s:.3g} {units}"))
+    handles += [Line2D([], [], color="k", ls="-", label="Q* (mJ, left)"),
+                Line2D([], [], color="k", ls="--", label=f"σ* ({units}, right)")]
+    ax.set_xlabel("mesh nodes")
+    ax.set_ylabel("Q* (mJ)")
+    twin.set_ylabel(f"σ* ({units})")
+    ax.grid(alpha=0.3)
     ax.set_title(f"convergence of {len(runs)} verified grasps", fontsize=9)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=4.5,
+              ncol=2, fontsize=8, frameon=False)
     return ax.figure
+
+
+def _title_above(fig, axes, text: str) -> None:
+    """``text`` as the figure's title just above ``axes`` (equal-aspect panels shrink
+    inside their slots, so ``suptitle``'s default place floats far above them)."""
+    fig.canvas.draw()
+    top = max(a.get_position().y1 for a in axes)
+    fig.suptitle(text, fontsize=9, y=min(top + 0.16, 0.99), va="bottom")
 
 
 def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: float = 1.0,
