@@ -117,12 +117,14 @@ def test_deformed_picture_title_labels_colour_bar(notched):
 
 
 def test_frame_is_tight_on_the_deformed_part(notched):
+    """The frame holds the deformed part and stays within the pads' stubs (their radius
+    and 5 % of the part's size) and a margin of it: no axis line stretches it."""
     res, mesh = notched["res"], notched["mesh"]
     ax = pp.plot_pad_grasp(res).axes[0]
     st = pp.pad_state(res)
     xy = (mesh.nodes + st.displacement) / MM
     lo, hi = np.minimum(xy.min(0), mesh.nodes.min(0) / MM), np.maximum(xy.max(0), mesh.nodes.max(0) / MM)
-    margin = 0.1 * mesh.diameter / MM
+    margin = (res.pad.radius + 0.1 * mesh.diameter) / MM       # the pads' stubs, a margin
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     assert lo[0] - margin <= x0 <= lo[0] and hi[0] <= x1 <= hi[0] + margin
     assert lo[1] - margin <= y0 <= lo[1] and hi[1] <= y1 <= hi[1] + margin

@@ -195,8 +195,10 @@ def _pad_outlines(curve, pad, state: PadState, scale: float, depth: float) -> li
 
 
 def _pad_depth(result) -> float:
-    """How far (m) the drawn pads reach behind their faces."""
-    return 0.15 * max(result.sigma0, result.pad.half_span)
+    """How far (m) the drawn pads reach behind their faces: a stub, at most 5 % of the
+    part's size, so that the frame holding them stays on the part."""
+    return min(0.15 * max(result.sigma0, result.pad.half_span),
+               0.05 * result.solver.mesh.diameter)
 
 
 def _frame(ax, pts: np.ndarray, margin: float = 0.04) -> None:
@@ -221,7 +223,7 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
     """Draw the deformed part of ``state`` (displacements × ``scale``) coloured by its
     averaged strain, the rest outline dashed, the pads and (``pressure``) the contact
     pressure as arrows into the boundary. Returns the colour mapping (for a colour bar)
-    and the points (plot units) the frame should hold."""
+    and the points (plot units) the frame should hold: the deformed part and the pads."""
     import matplotlib.tri as mtri
 
     s = 1.0 / length_scale(units)
@@ -237,13 +239,15 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
         ax.plot(xy[ring, 0], xy[ring, 1], color="k", lw=1.0, zorder=3)
     if depth is None:
         depth = 0.15 * max(curve.sigma0, pad.half_span)
+    pts = [xy]
     if curve.touch is not None:
         for k, P in enumerate(_pad_outlines(curve, pad, state, scale, depth)):
             ax.fill(P[:, 0] * s, P[:, 1] * s, color="0.35", alpha=0.75, lw=0, zorder=4,
                     label="pads" if k == 0 else None)
+            pts.append(P * s)
     if pressure:
         _draw_pressure(ax, mesh, xy, state, s)
-    return pc, xy
+    return pc, np.vstack(pts)
 
 
 #: Most pressure arrows drawn: on a fine mesh every ``k``-th pressed node along the
