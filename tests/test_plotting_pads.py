@@ -149,6 +149,15 @@ def test_pads_touch_the_deformed_part_where_the_path_presses(case, request):
     assert not any(shapely.contains(p, pts).any() for p in pads)
 
 
+def test_draw_pads_puts_the_pads_where_the_picture_does(notched):
+    res = notched["res"]
+    drawn = [np.asarray(p.get_xy()) for p in pp.plot_pad_grasp(res).axes[0].patches]
+    fig, ax = plt.subplots()
+    pp.draw_pads(ax, res, res.sigma_star)
+    for a, b in zip(drawn, [np.asarray(p.get_xy()) for p in ax.patches], strict=True):
+        np.testing.assert_allclose(a, b)
+
+
 def test_contact_pressure_arrows(notched):
     res, mesh = notched["res"], notched["mesh"]
     ax = pp.plot_pad_grasp(res).axes[0]

@@ -88,21 +88,28 @@ def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarr
 
 
 def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
-    """Draw both pads of ``result`` at separation ``sigma`` (default: first touch)."""
+    """Draw both pads of ``result`` at separation ``sigma`` (m; default first touch) where
+    the contact path puts them relative to the part in its solver's gauge (pad A's face at
+    ``z_a − t``, pad B's at ``z_b − δ − t``; see :class:`PadState`)."""
     s = 1.0 / length_scale(units)
     curve = result.start_curve
-    touch = curve.touch
     sigma = result.sigma0 if sigma is None else sigma
-    # Pad A moves along +a and pad B along −a as the squeeze δ grows (both modes).
-    delta = float(curve.delta(sigma))
-    za, zb = touch.z_a + 0.5 * delta, touch.z_b - 0.5 * delta
-    depth = 0.15 * max(result.sigma0, result.pad.half_span)
-    if touch.expanding:                     # back to back inside the hole
-        depth = min(depth, 0.45 * max(za - zb, 1e-12))
-    for z, side in ((za, 1), (zb, -1)):
-        P = _capsule(result.pad, result.axis, z, side, s, depth)
-        ax.fill(P[:, 0], P[:, 1], color=kw.get("color", "0.35"), alpha=kw.get("alpha", 0.8), lw=0)
+    delta, t = _path_motion(curve, sigma)
+    for P in _outlines_at(curve, result.pad, delta, t, _pad_depth(result)):
+        ax.fill(P[:, 0] * s, P[:, 1] * s, color=kw.get("color", "0.35"),
+                alpha=kw.get("alpha", 0.8), lw=0)
     return ax
+
+
+def _path_motion(curve, sigma: float) -> tuple[float, float]:
+    """The squeeze ``δ`` (m) at ``sigma`` and the part's axial translation ``t`` (m) on
+    the curve's contact path there (0 before first touch)."""
+    path = curve.path
+    if path is None:
+        return 0.0, 0.0
+    delta = float(curve.delta(sigma))
+    t = float(np.interp(delta, path.delta, path.t)) if len(path.delta) > 1 else 0.0
+    return delta, t
 
 
 @dataclass(frozen=True)
@@ -162,11 +169,10 @@ def curve_state(solver, curve, sigma: float, ell: float) -> PadState:
     if path is None:
         u, t, delta = np.zeros(2 * n), 0.0, 0.0
     else:
-        delta = float(curve.delta(sigma))
+        delta, t = _path_motion(curve, sigma)
         lam = path.multipliers(delta)
         np.add.at(forces, curve.nodes, lam[:, None] * curve.normals)
         u = solver.displacement(solver.load_vector(curve, lam))
-        t = float(np.interp(delta, path.delta, path.t)) if len(path.delta) > 1 else 0.0
     point, cell = state_data(mesh, FieldState("picture", u, forces), ell)
     strain = np.asarray(cell["strain_magnitude_averaged"], float).reshape(-1)
     return PadState(float(sigma), delta, np.asarray(u, float).reshape(n, 2), t, forces,
@@ -186,12 +192,17 @@ def pad_state(result, sigma: float | None = None) -> PadState:
 def _pad_outlines(curve, pad, state: PadState, scale: float, depth: float) -> list[np.ndarray]:
     """Outlines (m) of pads A and B of ``curve`` at ``state``, displacements × ``scale``:
     A's face at ``z_a − t``, B's at ``z_b − δ − t`` (the contact path's frame)."""
+    return _outlines_at(curve, pad, scale * state.delta, scale * state.translation, depth)
+
+
+def _outlines_at(curve, pad, delta: float, t: float, depth: float) -> list[np.ndarray]:
+    """Outlines (m) of the pads of ``curve`` at squeeze ``delta`` and part translation
+    ``t`` (m): A's face at ``z_a − t``, B's at ``z_b − δ − t``."""
     touch = curve.touch
-    t, d = scale * state.translation, scale * state.delta
     if touch.expanding:                         # back to back inside the hole
-        depth = min(depth, 0.45 * max(abs(touch.z_a - touch.z_b) + d, 1e-12))
+        depth = min(depth, 0.45 * max(abs(touch.z_a - touch.z_b) + delta, 1e-12))
     return [_capsule(pad, curve.axis, touch.z_a - t, 1, 1.0, depth),
-            _capsule(pad, curve.axis, touch.z_b - d - t, -1, 1.0, depth)]
+            _capsule(pad, curve.axis, touch.z_b - delta - t, -1, 1.0, depth)]
 
 
 def _pad_depth(result) -> float:
