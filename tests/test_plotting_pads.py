@@ -387,6 +387,14 @@ def test_plot_folder_still_writes_pngs(tmp_path):
     assert plot_file(tmp_path / "a.b", "grasp") == tmp_path / "a.b" / "grasp.png"
     assert plot_file(tmp_path / "c.PDF", "grasp") == tmp_path / "c_grasp.pdf"
     assert plot_file(tmp_path / "c.svg", "check", single=True) == tmp_path / "c.svg"
+    # an existing file that is no folder (a device): PNG into it, for a single figure
+    assert plot_file("/dev/null", "mesh", single=True) == Path("/dev/null")
+
+
+def test_plot_to_a_device(capsys):
+    rc, out, err = _cli(["mesh", ROOT / "examples" / "rectangle.json", "--plot", "/dev/null",
+                         "-q"], capsys)
+    assert rc == 0 and not err
 
 
 @pytest.mark.parametrize("command", ["optimize", "plan", "check", "mesh"])

@@ -317,7 +317,8 @@ def plot_target(value: str | Path, flag: str = "--plot") -> tuple[Path, str, str
     suffix sets the format of every figure, and its stem prefixes their names (``stem``;
     a command drawing one figure writes that file itself, see :func:`plot_file`). A path
     without a suffix, or an existing folder, is a folder of PNG figures (``stem`` is
-    ``None``). Any other suffix is refused, before any work.
+    ``None``) — unless it exists and is no folder (``/dev/stdout``, a FIFO): then PNG
+    goes into it. Any other suffix is refused, before any work.
 
     Parameters
     ----------
@@ -355,7 +356,11 @@ def plot_target(value: str | Path, flag: str = "--plot") -> tuple[Path, str, str
     if str(value) == "":
         raise DeformClosureError(f"{flag}: empty path; give a folder or a .png, .svg or .pdf file")
     suffix = p.suffix.lower()
-    if not suffix or p.is_dir():
+    if p.is_dir():
+        return p, "png", None
+    if not suffix:
+        if p.exists():              # a device or a FIFO (/dev/stdout), a file: PNG into it
+            return p.parent, "png", p.name
         return p, "png", None
     if suffix[1:] in PLOT_FORMATS:
         return p.parent, suffix[1:], p.stem

@@ -72,10 +72,16 @@ def _check_outputs(command: str, part: str, params: dict) -> None:
             continue
         if opt.role == "input":
             inputs.append(value)
-        elif opt.kind == "plot":             # created by the writer, like a folder
+        elif opt.kind == "plot":             # its folder is created by the writer
+            from pathlib import Path
+
             from ..outputs import plot_target
 
-            folders.append(plot_target(value, opt.flags[-1])[0])
+            target = plot_target(value, opt.flags[-1])
+            if Path(value).exists() and not Path(value).is_dir():
+                files.append(value)         # a file, a device, a FIFO: written in place
+            else:
+                folders.append(target[0])
         elif opt.role == "output":
             (folders if opt.kind == "folder" else files).append(value)
     if command == "optimize" and params.get("export_fields"):
