@@ -242,6 +242,7 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
     tri = mtri.Triangulation(xy[:, 0], xy[:, 1], mesh.triangles)
     pc = ax.tripcolor(tri, facecolors=state.strain, cmap=cmap, norm=norm, edgecolors="face",
                       linewidth=0.0, zorder=1)
+    pc.set_rasterized(True)      # SVG/PDF: the thousands of coloured triangles as one image
     for i, lp in enumerate(mesh.loops):
         ring = np.append(lp, lp[0])
         if rest:
