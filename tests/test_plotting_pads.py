@@ -447,3 +447,24 @@ def test_check_plot_without_escape_path_draws_the_check_and_a_note(tmp_path):
     written = rep.save(report=False)
     assert written == [str(tmp_path / "check.svg")]
     assert _has_magic(tmp_path / "check.svg", "svg")
+
+
+@pytest.mark.slow           # about 6 s: the verification refines to its time budget
+def test_plan_plot_pdf_and_scale_stays_out_of_the_job_key(tmp_path):
+    """``plan --plot dir/plan.pdf``: the map, the axes, the deformed top grasps and (the
+    verified row refined on two levels) the convergence, all PDF; ``--scale`` draws only,
+    so a batch job's key ignores it."""
+    from deformclosure import reports
+
+    rep = reports.run("plan", ROOT / "examples" / "notched_bar.json",
+                      {"pad_radius": 2.0, "grid_angles": 6, "grid_offsets": 16, "verify": 1,
+                       "max_area": 2.0, "rtol": 1e-3, "max_seconds": 6.0, "scale": 2.0,
+                       "plot": str(tmp_path / "out" / "plan.pdf")})
+    best = rep.data["axes"][0]
+    assert best["verified"] and len(best["convergence"]) == best["n_levels"] >= 2
+    written = [Path(p) for p in rep.save(report=False)]
+    assert [p.name for p in written] == [f"plan_{n}.pdf" for n in
+                                         ("quality_map", "top_axes", "top_grasps", "convergence")]
+    assert all(_has_magic(p, "pdf") for p in written)
+    key = reports.key_params("plan", rep.params)
+    assert "scale" not in key and "plot" not in key
