@@ -71,10 +71,11 @@ def _check_outputs(command: str, part: str, params: dict) -> None:
         elif opt.role == "output":
             (folders if opt.kind == "folder" else files).append(value)
     if command == "optimize" and params.get("export_fields"):
-        from ..fields import check_field_path, field_paths
+        from ..fields import check_field_path, field_paths, pads_path
 
         check_field_path(params["export_fields"])
-        files += field_paths(params["export_fields"], ["sigma_star", "sigma_L"])
+        states = field_paths(params["export_fields"], ["sigma_star", "sigma_L"])
+        files += states + [pads_path(f) for f in states if f.suffix.lower() != ".pvd"]
     check_outputs(files, folders, inputs)
 
 
