@@ -19,8 +19,23 @@
 # (with `jupytext` installed) or VS Code, or run it as a script. The test suite runs it.
 
 # %%
+from pathlib import Path
+
 import matplotlib.pyplot as plt
 import numpy as np
+
+
+def _examples() -> Path:
+    """The examples/ folder, wherever this runs from (the repository, examples/, a copy)."""
+    here = [Path(__file__).resolve().parent] if "__file__" in globals() else []
+    for d in here + [Path.cwd(), *Path.cwd().parents]:
+        for e in (d, d / "examples"):
+            if (e / "drawings" / "gasket.dxf").is_file():
+                return e
+    raise FileNotFoundError("run the tour inside the deformclosure repository (examples/ not found)")
+
+
+EXAMPLES = _examples()
 
 import deformclosure as dc
 from deformclosure.part import part_from_drawing
@@ -36,7 +51,7 @@ from deformclosure.plotting.pads import plot_pad_grasp, plot_pad_plan, plot_pad_
 # sit beside it in `gasket.material.json`. Arcs are flattened on the exact curve.
 
 # %%
-part = part_from_drawing("examples/drawings/gasket.dxf", layer="OUTLINE")
+part = part_from_drawing(EXAMPLES / "drawings" / "gasket.dxf", layer="OUTLINE")
 print(f"{part.name}: area {part.area * 1e6:.1f} mm², {len(part.holes)} holes, "
       f"E = {part.material.youngs_modulus / 1e6:g} MPa")
 mesh = dc.mesh_part(part)

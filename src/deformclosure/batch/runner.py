@@ -233,10 +233,10 @@ class _Recorder:
         self._bar = None
 
     def bar(self, total: int, progress: bool):
-        from tqdm import tqdm
+        from ..log import progress_bar
 
-        self._bar = tqdm(total=total, disable=not progress or total == 0, unit="job",
-                         desc="batch", file=sys.stderr, dynamic_ncols=True)
+        self._bar = progress_bar(total, "batch", "job", file=sys.stderr,
+                                 disable=not progress or total == 0, dynamic_ncols=True)
         return self._bar
 
     def __call__(self, job: Job, out: dict) -> None:

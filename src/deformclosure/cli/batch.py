@@ -7,11 +7,10 @@ import click
 __all__ = ["command"]
 
 EPILOG = """\b
-Examples:
-  deformclosure batch parts/ -o results.sqlite --options "--top 5"
-  deformclosure batch jobs.json -o results.sqlite --workers 4
-  deformclosure batch jobs.csv -o results.sqlite --scheduler tcp://10.0.0.5:8786
-  deformclosure results results.sqlite --format csv -o results.csv
+Examples (from the repository root):
+  deformclosure batch examples/drawings/ -o drawings.sqlite --command mesh
+  deformclosure batch examples/ -o results.sqlite --options "--top 5" --workers 2
+  deformclosure results drawings.sqlite --format csv -o drawings.csv
 
 \b
 JOBS is a folder (one job per part or mesh file, running --command with --options)
@@ -19,7 +18,9 @@ or a job list: JSON [{"part": "a.json", "command": "optimize", "options": ["--at
 "0,10", "12,10"]}, ...] or CSV with the header part,command,options (options one
 shell-quoted string); paths relative to the list file, and inside its folder
 (--allow-outside lifts this for a list you trust). A field holds at most 4096
-characters and no NUL.
+characters and no NUL. A drawing's material file <name>.material.json travels with the
+drawing <name>.dxf (or .svg) and is no job of its own. Your own lists and clusters:
+"deformclosure batch jobs.json -o results.sqlite", "... --scheduler tcp://HOST:8786".
 \b
 Each finished job is committed at once; run the same command again to resume: jobs
 already in the results file are skipped (--retry-failed runs failed ones again).

@@ -11,8 +11,8 @@ __all__ = ["command"]
 
 EPILOG = """\b
 Examples:
-  deformclosure check examples/rectangle.json --fingers fingers.json
-  deformclosure check part.json --fingers fingers.json -o report.json --plot check.png
+  deformclosure check examples/rectangle.json --fingers examples/fingers/rectangle.json
+  deformclosure check examples/l_shape.json --fingers examples/fingers/l_shape.json -o check.json --plot check.png
 
 \b
 The finger file (JSON) lists fingers in its own "units":

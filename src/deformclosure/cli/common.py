@@ -85,10 +85,11 @@ def _check_outputs(command: str, part: str, params: dict) -> None:
         elif opt.role == "output":
             (folders if opt.kind == "folder" else files).append(value)
     if command == "optimize" and params.get("export_fields"):
-        from ..fields import check_field_path, field_paths
+        from ..fields import check_field_path, field_paths, pads_path
 
         check_field_path(params["export_fields"])
-        files += field_paths(params["export_fields"], ["sigma_star", "sigma_L"])
+        states = field_paths(params["export_fields"], ["sigma_star", "sigma_L"])
+        files += states + [pads_path(f) for f in states if f.suffix.lower() != ".pvd"]
     check_outputs(files, folders, inputs)
 
 
@@ -104,12 +105,15 @@ def run_report(command: str, part: str, params: dict) -> int:
     from ..reports import run
 
     _check_outputs(command, part, params)
+    from ..log import compile_notice
+
     desc, unit = _PROGRESS.get(command, (command, "step"))
-    progress, close = lazy_progress(bool(params.get("quiet")), desc, unit)
+    progress, close, say = lazy_progress(bool(params.get("quiet")), desc, unit)
     quiet = bool(params.get("quiet")) or VERBOSITY.get() == 0
     try:
-        rep = run(command, part, params, progress=progress,
-                  notify=None if quiet else (lambda s: click.echo(s, err=True)))
+        with compile_notice(say):
+            rep = run(command, part, params, progress=progress,
+                      notify=None if quiet else (lambda s: click.echo(s, err=True)))
     finally:
         close()
     for w in rep.warnings:
@@ -129,8 +133,15 @@ def run_report(command: str, part: str, params: dict) -> int:
 
 
 def lazy_progress(quiet: bool, desc: str, unit: str):
-    """A ``progress(done, total)`` callback whose tqdm bar appears at the first call (so
-    input errors print no bar), and a ``close()`` for it."""
+    """A ``progress(done, total)`` callback whose bar appears at the first call (so input
+    errors print no bar), a ``close()`` for it, and ``say(text)``: a line on standard
+    error that does not break the bar (nothing when quiet).
+
+    The bar is :func:`deformclosure.log.progress_bar`'s: tqdm on a terminal, plain lines
+    without carriage returns when standard error is a file or a pipe.
+    """
+    import sys
+
     state: dict[str, Any] = {"bar": None}
     quiet = quiet or VERBOSITY.get() == 0
 
@@ -138,16 +149,24 @@ def lazy_progress(quiet: bool, desc: str, unit: str):
         if quiet:
             return
         if state["bar"] is None:
-            from tqdm import tqdm
+            from ..log import progress_bar
 
-            state["bar"] = tqdm(total=total, desc=desc, unit=unit, leave=False)
+            state["bar"] = progress_bar(total, desc, unit, file=sys.stderr, leave=False)
         state["bar"].update(done - state["bar"].n)
 
     def close() -> None:
         if state["bar"] is not None:
             state["bar"].close()
 
-    return progress, close
+    def say(text: str) -> None:
+        if quiet:
+            return
+        if state["bar"] is not None:
+            state["bar"].write(text, file=sys.stderr)
+        else:
+            print(text, file=sys.stderr, flush=True)
+
+    return progress, close, say
 
 
 def with_verbosity(command, keep_stdout: bool = False):

@@ -10,9 +10,9 @@ __all__ = ["command"]
 
 EPILOG = """\b
 Examples:
-  deformclosure import gasket.dxf -o gasket.json --material rubber.json
-  deformclosure import bracket.dxf -o bracket.json --layer OUTLINE --units mm --tolerance 0.01
-  deformclosure import logo.svg -o logo.json --material '{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1, "elastic_limit_strain": 0.8}'
+  deformclosure import examples/drawings/gasket.dxf -o gasket.json
+  deformclosure import examples/drawings/gasket.dxf -o gasket.json --layer OUTLINE --units mm --tolerance 0.01
+  deformclosure import examples/drawings/gasket.dxf -o gasket.json --material '{"youngs_modulus": 2e6, "poisson_ratio": 0.1, "thickness": 1, "elastic_limit_strain": 0.8}'
 
 \b
 DXF: closed LWPOLYLINE/POLYLINE, chains of LINE/ARC/open polylines/splines, CIRCLE,

@@ -18,7 +18,7 @@ EPILOG = """\b
 Examples:
   deformclosure demo
   deformclosure mesh examples/rectangle.json -o mesh.json --plot mesh.png
-  deformclosure import drawing.dxf --material examples/rectangle.json -o part.json
+  deformclosure import examples/drawings/gasket.dxf --material examples/rectangle.json -o part.json
   deformclosure optimize examples/rectangle.json --at 0,10 12,10 -o report.json --plot out/
   deformclosure check examples/l_shape.json --fingers examples/fingers/l_shape.json
   deformclosure plan examples/rectangle.json --top 10 -o plan.json --plot plan/

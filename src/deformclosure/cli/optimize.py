@@ -13,10 +13,11 @@ EPILOG = """\b
 Examples (pads, the default model, SPEC §6):
   deformclosure optimize examples/notched_bar.json --at 15,0 15,12 --pad-radius 2 -o report.json --plot out/
   deformclosure optimize examples/rectangle.json --axis 6,10,0 --pad-radius 1 --pad-width 4 --rtol 0.02
+  deformclosure optimize examples/notched_bar.json --at 15,0 15,12 --pad-radius 2 --export-fields squeeze.pvd
 \b
 Paper model (point jaws at mesh nodes, SPEC §4, for reproduction):
   deformclosure optimize examples/rectangle.json --model paper --at 0,10 12,10 -o report.json
-  deformclosure optimize mesh.json --model paper --jaws 3 17 --method approx --eps 1e-6
+  deformclosure optimize examples/rectangle.json --model paper --jaws 6 127 --method approx --eps 1e-6
   deformclosure optimize examples/ring.json --model paper --at 1.5,0 -1.5,0 --expanding
 
 \b

@@ -7,11 +7,11 @@ import click
 __all__ = ["command"]
 
 EPILOG = """\b
-Examples:
-  deformclosure results results.sqlite
-  deformclosure results results.sqlite --status failed
-  deformclosure results results.sqlite --format csv -o results.csv
-  deformclosure results results.sqlite --format json -o results.json
+Examples (after "deformclosure batch examples/drawings/ -o drawings.sqlite --command mesh"):
+  deformclosure results drawings.sqlite
+  deformclosure results drawings.sqlite --status failed
+  deformclosure results drawings.sqlite --format csv -o drawings.csv
+  deformclosure results drawings.sqlite --format json -o drawings.json
 
 \b
 The table and CSV show the key figures of each report in SI units; CSV columns carry

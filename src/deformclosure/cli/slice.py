@@ -11,8 +11,8 @@ __all__ = ["command"]
 
 EPILOG = """\b
 Examples:
-  deformclosure slice examples/rectangle.json --node 3 --fingers fingers.json --plot slice.png
-  deformclosure slice mesh.json --at 0,10 --fingers f.json --extent -2,2,8,12 -o slice.npz
+  deformclosure slice examples/rectangle.json --node 3 --fingers examples/fingers/rectangle.json --plot slice.png
+  deformclosure slice examples/rectangle.json --at 0,10 --fingers examples/fingers/rectangle.json --extent -2,2,8,12 -o slice.npz
 
 \b
 Node ids are those of `deformclosure mesh PART` (the part is meshed the same way).

@@ -335,21 +335,26 @@ _MATERIAL_FIELDS = ("youngs_modulus", "poisson_ratio", "thickness", "elastic_lim
 
 def material_cell_data(material: Material, n: int) -> dict[str, list[np.ndarray]]:
     """The material as constant cell fields of ``n`` triangles (meshio ``cell_data``: one
-    list of one array per field of :data:`_MATERIAL_FIELDS`, SI; no critical distance is
-    NaN), as every mesh file we write carries it."""
+    list of one array per field of :data:`_MATERIAL_FIELDS`, SI), as every mesh file we
+    write carries it. A material without its own critical distance (the default, 2 % of
+    the diameter) has no ``critical_distance`` array: no NaN in a file ParaView shows."""
     cd = material.critical_distance
     values = (material.youngs_modulus, material.poisson_ratio, material.thickness,
-              material.elastic_limit_strain, float(material.plane == "strain"),
-              np.nan if cd is None else cd)
-    return {k: [np.full(n, v, dtype=float)] for k, v in zip(_MATERIAL_FIELDS, values)}
+              material.elastic_limit_strain, float(material.plane == "strain"), cd)
+    return {k: [np.full(n, v, dtype=float)] for k, v in zip(_MATERIAL_FIELDS, values)
+            if v is not None}
 
 
 def _material_from_cell_data(m: Any, path: InputFile) -> Material | None:
-    """The material a meshio mesh carries in its triangle cell data (written by us)."""
-    if not all(k in m.cell_data for k in _MATERIAL_FIELDS):
+    """The material a meshio mesh carries in its triangle cell data (written by us); no
+    ``critical_distance`` array (or NaN, as older files wrote it) is the default one."""
+    if not all(k in m.cell_data for k in _MATERIAL_FIELDS[:-1]):
         return None
     vals = []
     for k in _MATERIAL_FIELDS:
+        if k not in m.cell_data:
+            vals.append(np.nan)
+            continue
         arr = np.concatenate([np.asarray(a, float).ravel()
                               for c, a in zip(m.cells, m.cell_data[k]) if c.type == "triangle"])
         v = arr[0] if arr.size else np.nan
@@ -371,8 +376,8 @@ def write_mesh(mesh: Mesh, path: str | Path) -> bool:
 
     The material goes into the file too: the ``"material"`` block of mesh JSON, or cell
     data (``youngs_modulus`` Pa, ``poisson_ratio``, ``thickness`` m,
-    ``elastic_limit_strain``, ``plane_strain`` 0/1, ``critical_distance`` m or NaN) for the
-    meshio formats of :data:`MATERIAL_FORMATS`.
+    ``elastic_limit_strain``, ``plane_strain`` 0/1, ``critical_distance`` m when the material
+    sets one) for the meshio formats of :data:`MATERIAL_FORMATS`.
 
     Returns
     -------

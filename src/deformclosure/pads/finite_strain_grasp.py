@@ -165,14 +165,24 @@ class FiniteStrainResult:
         at finite strain, as a :class:`deformclosure.fields.FieldState`."""
         from ..fields import FieldState
 
+        from .geometry import placed_pads
+
         c = self.start_curve
         n = self.linear.n_nodes
         forces = np.zeros((n, 2))
-        st = c.state(c.delta(sigma)) if c.delta(sigma) > c.delta0 else None
+        delta = float(c.delta(sigma))
+        st = c.state(delta) if delta > c.delta0 else None
         if st is None:
-            return FieldState(label, np.zeros(2 * n), forces)
+            if c.touch is None:
+                return FieldState(label, np.zeros(2 * n), forces, sigma=float(sigma))
+            pads = placed_pads(self.pad, self.axis, c.touch, max(delta, 0.0),
+                               self.linear.solver.mesh.nodes, np.zeros(2 * n), forces)
+            return FieldState(label, np.zeros(2 * n), forces, sigma=float(sigma),
+                              squeeze=delta, pads=pads)
         np.add.at(forces, c.problem.node, st.forces())
-        return FieldState(label, st.u, forces)
+        pads = placed_pads(self.pad, self.axis, c.touch, delta, self.linear.solver.mesh.nodes,
+                           st.u, forces)
+        return FieldState(label, st.u, forces, sigma=float(sigma), squeeze=delta, pads=pads)
 
     def linear_model_error(self) -> dict[str, float | None]:
         """Relative difference ``(linear − finite strain) / finite strain`` of ``U`` and

@@ -33,7 +33,8 @@ from ..contact.bodies import FLANK_ANGLE, Capsule
 from ..errors import GraspError
 from ..geometry import is_finite_number, touch_tolerance
 
-__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "FLANK_ANGLE"]
+__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "pad_outline", "placed_pads",
+           "FLANK_ANGLE"]
 
 
 @dataclass(frozen=True)
@@ -223,3 +224,81 @@ def first_touch(ring: np.ndarray, axis: GraspAxis, pad: Pad,
                     + (xm + axis.offset) * axis.normal))
     (za, pa), (zb, pb) = out
     return FirstTouch(za, zb, pa, pb, start is not None)
+
+
+def pad_outline(pad: Pad, axis: GraspAxis, z: float, side: int, depth: float,
+                n: int = 24) -> np.ndarray:
+    """Outline (m, part frame; one turn, the first point not repeated) of a pad whose face
+    is at axial position ``z`` (m): the face and its rounded ends towards the part, and
+    ``depth`` (m) of body behind them.
+
+    ``side`` is +1 for pad A (occupies ``s ≤ z − d(x)``) and −1 for pad B
+    (``s ≥ z + d(x)``). ``n`` points per rounded end.
+    """
+    a, nrm = axis.direction, axis.normal
+    h, r = 0.5 * pad.width, pad.radius
+    t = np.linspace(0.0, np.pi / 2, n)
+    # (x, distance behind the face) of the face side, then the back edge
+    right = np.column_stack([h + r * np.sin(t), r - r * np.cos(t)])
+    prof = np.vstack([right[::-1] * [-1.0, 1.0], right])
+    if h == 0.0:
+        prof = np.delete(prof, n, axis=0)             # the two ends meet at x = 0
+    back = np.array([[h + r, r + depth], [-h - r, r + depth]])
+    x, sd = np.vstack([prof, back]).T
+    o = np.asarray(axis.origin, float) + axis.offset * nrm
+    return o[None] + x[:, None] * nrm[None] + (z - side * sd)[:, None] * a[None]
+
+
+def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
+                nodes: np.ndarray, u: np.ndarray, forces: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Outlines (m) of pads A and B at squeeze ``delta`` (m), where they touch the part
+    displaced by ``u``.
+
+    Each pad moves in by half the squeeze from its first-touch face position; the part
+    floats, so its displacement has a gauge (SPEC §6) that may shift it along the axis
+    against that split. The pads are shifted together by the mean offset of the loaded
+    nodes from the faces (a loaded node of pad A sits at ``s + a·u = z_A − d(x) − d'(x) n·u``,
+    of pad B at ``s + a·u = z_B + d(x) + d'(x) n·u``: the model's gaps, linearised in
+    ``u``; a node pushed along ``+a`` is pad A's), so the faces sit on the deformed part
+    to first order in ``u``.
+
+    Parameters
+    ----------
+    pad, axis, touch
+        The gripper and its first touch (rest geometry).
+    delta : float
+        Squeeze (m), ≥ 0.
+    nodes : ndarray, shape (n, 2)
+        Rest positions (m).
+    u, forces : ndarray, shape (n, 2) or (2n,)
+        Node displacements (m) and contact forces on the nodes (N).
+
+    Returns
+    -------
+    outline_a, outline_b : ndarray, shape (k, 2)
+        As :func:`pad_outline`; the body behind each face is 0.15 max(σ0, W/2 + ρ) deep
+        (less between back-to-back pads opening in a hole).
+    """
+    nodes = np.asarray(nodes, float)
+    u = np.asarray(u, float).reshape(-1, 2)
+    f = np.asarray(forces, float).reshape(-1, 2)
+    za, zb = touch.z_a + 0.5 * delta, touch.z_b - 0.5 * delta
+    a = axis.direction
+    fa = f @ a
+    scale = np.abs(fa).max() if len(fa) else 0.0
+    loaded = np.abs(fa) > 1e-9 * scale if scale > 0 else np.zeros(len(fa), bool)
+    if loaded.any():
+        s, x = axis.coordinates(nodes[loaded])
+        d, slope = pad.profile(x, capped=False)
+        ok = np.isfinite(d) & np.isfinite(slope)
+        # the model's gap, linearised in u (pads/contact.py): d(x) + d'(x) n·u
+        d = np.where(ok, d + np.where(ok, slope, 0.0) * (u[loaded] @ axis.normal), 0.0)
+        s = s + u[loaded] @ a
+        face = np.where(fa[loaded] > 0, s + d - za, s - d - zb)
+        shift = float(np.mean(face))
+        za, zb = za + shift, zb + shift
+    depth = 0.15 * max(touch.sigma0, pad.half_span)
+    if touch.expanding:                     # back to back inside the hole
+        depth = min(depth, 0.45 * max(za - zb, 1e-12))
+    return pad_outline(pad, axis, za, 1, depth), pad_outline(pad, axis, zb, -1, depth)

@@ -124,15 +124,20 @@ class PadGraspResult:
         ``sigma`` (m), as a :class:`deformclosure.fields.FieldState`."""
         from ..fields import FieldState
 
+        from .geometry import placed_pads
+
         solver, curve = self.solver, self.start_curve
         n = solver.mesh.n_nodes
         forces = np.zeros((n, 2))
         if curve.path is None:
-            return FieldState(label, np.zeros(2 * n), forces)
-        lam = curve.path.multipliers(curve.delta(sigma))
+            return FieldState(label, np.zeros(2 * n), forces, sigma=float(sigma))
+        delta = float(curve.delta(sigma))
+        lam = curve.path.multipliers(delta)
         np.add.at(forces, curve.nodes, lam[:, None] * curve.normals)
         u = solver.displacement(solver.load_vector(curve, lam))
-        return FieldState(label, u, forces)
+        pads = placed_pads(self.pad, self.axis, curve.touch, max(delta, 0.0),
+                           solver.mesh.nodes, u, forces)
+        return FieldState(label, u, forces, sigma=float(sigma), squeeze=delta, pads=pads)
 
     @property
     def verdict(self) -> str:

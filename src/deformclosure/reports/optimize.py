@@ -280,11 +280,11 @@ def _pads_writer(inp):
         write_report(rep, report)
         fine, p, written = rep.result.finest, rep.params, []
         if p["export_fields"]:
+            states = [fine.state_at(sig, label) for label, sig in
+                      _field_sigmas(p["export_fields"], fine.sigma0, fine.sigma_L,
+                                    fine.sigma_star)]
             from ..fields import write_fields
 
-            sigmas = ([("sigma_star", fine.sigma_star)] if fine.sigma_star is not None else []) \
-                + [("sigma_L", fine.sigma_L)]
-            states = [fine.state_at(sig, label) for label, sig in sigmas]
             written += write_fields(p["export_fields"], fine.solver.mesh, states,
                                     fine.limit.critical_distance)
         if p["plot"]:
@@ -401,9 +401,9 @@ def _paper_writer(inp, jaws, model):
             from ..fields import write_fields
             from ..elasticity.critical_distance import critical_distance_of
 
-            sigmas = ([("sigma_star", res.sigma_star)] if res.sigma_star is not None else []) \
-                + [("sigma_L", res.limit.sigma_L)]
-            states = [paper_state(res, jaws, sig, label) for label, sig in sigmas]
+            states = [paper_state(res, jaws, sig, label) for label, sig in
+                      _field_sigmas(p["export_fields"], res.limit.sigma0, res.limit.sigma_L,
+                                    res.sigma_star)]
             written += write_fields(p["export_fields"], inp.mesh, states,
                                     critical_distance_of(inp.mesh))
         if p["plot"]:
@@ -413,6 +413,20 @@ def _paper_writer(inp, jaws, model):
         return [str(w) for w in written]
 
     return write
+
+
+def _field_sigmas(path, sigma0: float, sigma_L: float, sigma_star: float | None
+                  ) -> list[tuple[str, float]]:
+    """The labelled separations (m) ``--export-fields`` writes: σ* and σ_L, or for a
+    ``.pvd`` the series from first touch to σ_L (:func:`deformclosure.fields.series_sigmas`)."""
+    from pathlib import Path
+
+    from ..fields import series_sigmas
+
+    if Path(path).suffix.lower() == ".pvd":
+        return series_sigmas(sigma0, sigma_L, sigma_star)
+    return ([("sigma_star", sigma_star)] if sigma_star is not None else []) \
+        + [("sigma_L", sigma_L)]
 
 
 def paper_state(res, jaws: tuple[int, int], sigma: float, label: str):
@@ -432,4 +446,4 @@ def paper_state(res, jaws: tuple[int, int], sigma: float, label: str):
     forces = np.zeros((mesh.n_nodes, 2))
     forces[a] = sign * lim.k01 * delta * d          # jaw a pushes towards b (contracting)
     forces[b] = -forces[a]
-    return FieldState(label, u, forces)
+    return FieldState(label, u, forces, sigma=float(sigma), squeeze=float(delta))

@@ -223,8 +223,10 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("export_graph", ("--export-graph",), "file", role="output",
             help="paper model: write the contact graph (JSON)."),
         Opt("export_fields", _FIELDS, "file", role="output",
-            help="Write the fields at σ* to FILE.vtu (and at σ_L to FILE_sigma_L.vtu) for "
-                 "ParaView: deformed mesh, displacement, strain, contact pressure."),
+            help="Write the fields at σ* to FILE.vtu (and at σ_L to FILE_sigma_L.vtu; pads: "
+                 "FILE_pads.vtu) for ParaView: rest mesh + displacement (Warp By Vector), "
+                 "strain and stress tensors, contact force and pressure; FILE.pvd: the "
+                 "squeeze from first touch to σ_L as an animation."),
         *_DISPLAY,
     ),
     "check": (
@@ -239,8 +241,9 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("saddle_levels", ("--saddle-levels",), "int", 2, show_default=True,
             help="Release landscape: halvings of the lattice near the saddle (error estimate)."),
         Opt("export_fields", _FIELDS, "file", role="output",
-            help="Write the fields at the equilibrium to FILE.vtu for ParaView: deformed "
-                 "mesh, displacement, strain, contact pressure."),
+            help="Write the fields at the equilibrium to FILE.vtu (or a one-frame FILE.pvd) "
+                 "for ParaView: rest mesh + displacement (Warp By Vector), strain and stress "
+                 "tensors, contact force and pressure."),
         Opt("rtol", ("--rtol",), "float",
             help="Refine the mesh (h halved per level) until the error estimates of U_A and "
                  "of the quality (mesh levels plus lattice) are within this fraction "
@@ -303,7 +306,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         Opt("region", ("--region",), "str", multiple=True, metavar="X0,Y0,X1,Y1",
             help="Allowed box for both jaws (repeatable; union), in --units."),
         Opt("units", ("--units",), "str", help="Unit of lengths given here (m, cm, mm, in)."),
-        _MAX_AREA,
+        _MATERIAL, _MAX_AREA,
         Opt("output", ("-o", "--output"), "file", role="output", help="JSON report (SI units)."),
         _plot("The pictures (pads: quality map over (angle, offset), top grasps deformed at "
               "sigma*, convergence of the verified ones)"),

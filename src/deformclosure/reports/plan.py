@@ -54,7 +54,7 @@ def _pads(part, p: dict, progress) -> Report:
     from ..pads.size_limits import WITH_TWIN, check_pads_size, search_axes
 
     check_grid(p["grid_angles"], p["grid_offsets"])
-    inp = read_inputs(part, p["units"], max_area=p["max_area"])
+    inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     # before the work: the plan's solvers and the curves of every axis of its grid
     est = check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN,
                           n_axes=p["grid_angles"] * p["grid_offsets"])
@@ -157,7 +157,7 @@ def _paper(part, p: dict, progress) -> Report:
 
     check_eps(p["eps"])
     check_jaw_width(p["jaw_width"])
-    inp = read_inputs(part, p["units"], max_area=p["max_area"])
+    inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     mode = "expanding" if p["expanding"] else "contracting"
     restricted = bool(p["region"]) or p["min_sep"] is not None or p["max_sep"] is not None
     check_paper_size(inp.mesh, mode=mode, plan=True, restricted=restricted)

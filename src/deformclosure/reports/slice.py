@@ -45,7 +45,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
     p = params
     if p["export_fields"] is not None:
-        check_field_path(p["export_fields"])
+        check_field_path(p["export_fields"], series=False)
     fsrc = source_of(p["fingers"], "finger file")
     fingers = load_fingers(fsrc)
     out = p["output"]
