@@ -101,6 +101,14 @@ class _Kinematics(NamedTuple):
     ok: np.ndarray       # (m,) bool: J > 0 and (plane stress) S₃₃ = 0 solvable
 
 
+def _times_gradients(M: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``M g_p`` per element and node: ``out[e, p, i] = Σ_J M[e, i, J] g[e, p, J]``."""
+    out = np.empty_like(g)
+    for i in range(2):
+        out[:, :, i] = M[:, i, 0, None] * g[:, :, 0] + M[:, i, 1, None] * g[:, :, 1]
+    return out
+
+
 class NeoHookean:
     """Total-Lagrangian compressible neo-Hookean energy of a triangle mesh (SPEC §8).
 
@@ -179,8 +187,15 @@ class NeoHookean:
             raise DeformClosureError(f"u: shape {u.shape}, expected ({self.n_dofs},) "
                                      "(DOFs [x0, y0, x1, y1, ...], m)")
         ue = u.reshape(-1, 2)[self._tri]                          # (m, 3, 2)
-        H = np.einsum("mpi,mpj->mij", ue, self._g)
-        F = H + np.eye(2)
+        g = self._g
+        H = np.empty((len(ue), 2, 2))                             # H_iJ = Σ_p u_p,i ∂N_p/∂X_J
+        for i in range(2):
+            for J in range(2):
+                H[:, i, J] = (ue[:, 0, i] * g[:, 0, J] + ue[:, 1, i] * g[:, 1, J]
+                              + ue[:, 2, i] * g[:, 2, J])
+        F = H.copy()
+        F[:, 0, 0] += 1.0
+        F[:, 1, 1] += 1.0
         x = H[:, 0, 0] + H[:, 1, 1] + (H[:, 0, 0] * H[:, 1, 1] - H[:, 0, 1] * H[:, 1, 0])
         with np.errstate(all="ignore"):
             ok = 1.0 + x > 0.0
@@ -263,7 +278,7 @@ class NeoHookean:
 
     def _gradient(self, k: _Kinematics, Q: np.ndarray, gamma: np.ndarray) -> np.ndarray:
         P = self.mu * (k.F - Q) + (gamma + self.mu)[:, None, None] * Q     # μF + γQ
-        fe = self._vol[:, None, None] * np.einsum("mij,mpj->mpi", P, self._g)   # (m, 3, 2)
+        fe = self._vol[:, None, None] * _times_gradients(P, self._g)     # (m, 3, 2)
         ids = self._tri.ravel()
         n = self.n_dofs // 2
         f = np.empty(self.n_dofs)
@@ -272,17 +287,28 @@ class NeoHookean:
         return f
 
     def _tangent(self, Q: np.ndarray, gamma: np.ndarray, beta: np.ndarray) -> sp.csr_matrix:
-        g = self._g
-        a = np.einsum("mij,mpj->mpi", Q, g)                        # a_p = Q g_p, (m, 3, 2)
+        a = _times_gradients(Q, self._g)                           # a_p = Q g_p, (m, 3, 2)
         v = self._vol[:, None, None, None, None]
-        gg = np.einsum("mpj,mqj->mpq", g, g)[:, :, :, None, None] * np.eye(2)
         # Products a·a first, then the coefficients: entry (p,i,q,k) and its transpose are
-        # then the same floating-point numbers, so K is exactly symmetric.
+        # then the same floating-point numbers, so K is exactly symmetric. The second
+        # product a_q,i a_p,k is the first with p and q exchanged.
         aa = a[:, :, None, :, None] * a[:, None, :, None, :]       # a_p,i a_q,k
-        ab = a[:, None, :, :, None] * a[:, :, None, None, :]       # a_q,i a_p,k
-        Kb = v * (self.mu * gg + beta[:, None, None, None, None] * aa
-                  - gamma[:, None, None, None, None] * ab)
+        Kb = v * (beta[:, None, None, None, None] * aa
+                  - gamma[:, None, None, None, None] * aa.transpose(0, 2, 1, 3, 4))
+        Kb += self._mu_blocks()
         return self._pattern.element_blocks(Kb, symmetric=True)
+
+    def _mu_blocks(self) -> np.ndarray:
+        """The constant part ``t A μ (g_p · g_q) δ_ik`` of the tangent's element blocks,
+        (m, 3, 3, 2, 2) (N/m), computed once."""
+        out = getattr(self, "_mu_blocks_cache", None)
+        if out is None:
+            g = self._g
+            gg = (g[:, :, None, 0] * g[:, None, :, 0] + g[:, :, None, 1] * g[:, None, :, 1])
+            out = (self.mu * self._vol)[:, None, None, None, None] \
+                * gg[:, :, :, None, None] * np.eye(2)
+            self._mu_blocks_cache = out
+        return out
 
     # ------------------------------------------------------------------ public
     def element_energies(self, u: np.ndarray) -> np.ndarray:
