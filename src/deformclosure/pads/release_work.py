@@ -44,6 +44,7 @@ the grid spacing: a move is one grid step (``Δθ = π/n_angles``, ``Δc = D/n_o
 from __future__ import annotations
 
 import math
+import time
 from typing import Callable
 
 import numpy as np
@@ -56,7 +57,12 @@ from .geometry import GraspAxis
 from .landscape import Landscape
 
 __all__ = ["gripper_centre", "row_tangents", "move_slip", "move_dissipation",
-           "contact_normal_forces", "is_released", "release_work"]
+           "contact_normal_forces", "is_released", "release_work", "OutOfTime"]
+
+
+class OutOfTime(Exception):
+    """A :func:`release_work` search passed its ``deadline`` (it is abandoned: no partial
+    work is returned)."""
 
 
 def gripper_centre(curve: GraspCurve) -> np.ndarray | None:
@@ -180,7 +186,8 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
                  normal_forces: Callable[[GraspCurve, float], np.ndarray] | None = None,
                  stop_above: float | None = None,
                  max_evaluations: int | None = None,
-                 cache: dict | None = None) -> DissipativeEscape:
+                 cache: dict | None = None,
+                 deadline: float | None = None) -> DissipativeEscape:
     """Release work ``U_A^μ`` (J) from axis ``start`` at separation ``sigma`` (SPEC §9).
 
     The least, over paths on the landscape's grid to an axis where no pad presses
@@ -207,6 +214,9 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
         Keeps what does not depend on σ between calls on one landscape (a σ*-search asks
         many σ): each vertex's rows and centre, and each move's slips (the rows of a curve
         and the rigid move are the same at every σ; only the forces change).
+    deadline : float, optional
+        ``time.perf_counter()`` value after which the search is abandoned
+        (:class:`OutOfTime` is raised; checked at every vertex energy).
 
     Returns
     -------
@@ -217,6 +227,8 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
     ------
     GraspError
         ``mu`` is not a finite number ≥ 0.
+    OutOfTime
+        The ``deadline`` passed.
     """
     if not (is_finite_number(mu) and mu >= 0):
         raise GraspError(f"friction = {mu!r}: give a friction coefficient μ ≥ 0")
@@ -291,7 +303,11 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
             return 0.0
         return float(row[moves_of(v)[0][w]])
 
-    return dissipative_escape(start, landscape.neighbours,
-                              lambda v, near: landscape.energy(v, sigma), dissipation,
+    def energy(v: int, near) -> float:
+        if deadline is not None and time.perf_counter() > deadline:
+            raise OutOfTime(f"release work at sigma = {sigma:.6g} m")
+        return landscape.energy(v, sigma)
+
+    return dissipative_escape(start, landscape.neighbours, energy, dissipation,
                               lambda v, e: is_released(landscape.curve(v), sigma),
                               stop_above=stop_above, max_evaluations=max_evaluations)
