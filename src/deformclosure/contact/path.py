@@ -340,7 +340,6 @@ def _factored_qp(Ws, b, e, J, zmask, fac):  # pragma: no cover - compiled
         bscale = max(bscale, abs(b[J[a]]))
     tol = 1e-12
     free = np.zeros(m, np.bool_)
-    pos = np.empty(nj, np.int64)
     for _ in range(20 * nj + 50):
         F = np.flatnonzero(~fixed)
         nf = F.shape[0]
