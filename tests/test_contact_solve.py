@@ -108,3 +108,115 @@ def test_rows_carry_tangents_for_friction():
     assert np.allclose(np.einsum("ij,ij->i", n, t), 0.0)
     assert np.allclose(np.linalg.norm(t, axis=1), 1.0)
     assert np.allclose(n[:, 0] * t[:, 1] - n[:, 1] * t[:, 0], 1.0)   # counter-clockwise
+
+
+# ------------------------------------------------- the factored path against the dense one
+def _dense_trace(W, g0, b, e, delta_max, gap_tol, max_pieces=10000):
+    """The squeeze path as ``contact.path._trace`` computed it before its derivative QPs
+    shared one kept Cholesky factor: every active-set iteration of every piece solves a
+    new dense KKT system (``_derivative_qp``, LU). Kept here as the reference (Python
+    loop over the pieces; the compiled QP of each piece)."""
+    from deformclosure.contact.path import _derivative_qp
+
+    m = len(g0)
+    t = -min(g0[i] / e[i] for i in range(m) if e[i] > 0)
+    delta = min((g0[i] + e[i] * t) / b[i] for i in range(m) if e[i] < 0)
+    lam = np.zeros(m)
+    D, L, T = [delta], [lam.copy()], [t]
+    reg = np.trace(W) * 1e-13 / max(m, 1)
+    for _ in range(max_pieces):
+        if delta >= delta_max or delta_max - delta <= 1e-11 * abs(delta_max):
+            break
+        g = g0 - delta * b + W @ lam + e * t
+        lam_scale = max(np.abs(lam).max(), 1e-300)
+        strong = lam > 1e-12 * lam_scale
+        touching = ~strong & (g <= gap_tol)
+        J = np.flatnonzero(strong | touching)
+        Wj = 0.5 * (W[np.ix_(J, J)] + W[np.ix_(J, J)].T) + reg * np.eye(len(J))
+        x, dt = _derivative_qp(Wj, b[J].copy(), e[J].copy(), touching[J].copy())
+        dlam = np.zeros(m)
+        dlam[J] = x
+        dg = W @ dlam + e * dt - b
+        xs = max(np.abs(x).max(initial=0.0), 1e-300)
+        stays = np.zeros(m, bool)
+        stays[J] = strong[J] | (x > 1e-12 * xs)
+        h = delta_max - delta
+        for i in range(m):
+            if dlam[i] < 0:
+                h = min(h, lam[i] / -dlam[i])
+            elif dlam[i] == 0 and dg[i] < 0 and not stays[i]:
+                h = min(h, max(g[i], 0.0) / -dg[i])
+        h = max(h, 0.0)
+        lam = np.maximum(lam + h * dlam, 0.0)
+        lam[(dlam < 0) & (np.abs(lam) <= 1e-12 * lam_scale)] = 0.0
+        t += h * dt
+        delta += h
+        if h > 0 or delta >= delta_max:
+            D.append(delta), L.append(lam.copy()), T.append(t)
+    return np.array(D), np.array(L), np.array(T)
+
+
+def _same_path(new, ref, scale_delta):
+    D0, L0, T0 = ref
+    D1, L1, T1 = new
+    assert D1.shape == D0.shape
+    lam_scale = max(np.abs(L0).max(), 1e-300)
+    assert np.abs(D1 - D0).max() <= 1e-10 * scale_delta
+    assert np.abs(L1 - L0).max() <= 1e-10 * lam_scale
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(2, 12), st.integers(0, 2**31 - 1))
+def test_factored_squeeze_path_is_the_dense_one(r, seed):
+    """The kept-factor derivative QPs (rows entering and leaving the Cholesky factor)
+    give the breakpoints and multipliers of the dense per-iteration solves, on random
+    two-body problems."""
+    from deformclosure.contact.path import _trace
+
+    rng = np.random.default_rng(seed)
+    nA = max(1, r // 2)
+    W = _spd(rng, r) * 1e-3
+    onB = np.arange(r) >= nA
+    e = np.where(onB, -1.0, 1.0)
+    b = np.where(onB, 1.0, 0.0)
+    g0 = rng.uniform(0.0, 1e-3, r)
+    args = (W, g0, b, e, 5e-3, 1e-15)
+    _same_path(_trace(*args, 10000), _dense_trace(*args), 5e-3)
+
+
+def test_factored_squeeze_path_is_the_dense_one_on_pad_curves():
+    """The same on the pads' own contact problems: the 12 x 20 mm block (about 800 nodes)
+    between flat 36 mm pads and 4 mm round-ended pads, at axes all round the part — many
+    rows touching at once (a flat face) and rows leaving (an end's corner)."""
+    import math
+
+    import deformclosure as dc
+    import deformclosure.contact.solve as solve_mod
+    from deformclosure.pads import GraspAxis, Pad
+    from deformclosure.pads.contact import PadContact
+
+    mm = 1e-3
+    mesh = dc.mesh_part(dc.Part.from_file("examples/rectangle.json"), max_area=3e-7)
+    pc = PadContact(mesh)
+    problems = []
+    original = solve_mod.trace_contact_path
+
+    def keep(W, g0, b, e, delta_max, **kw):
+        problems.append((np.ascontiguousarray(W), g0, b, e, float(delta_max), kw["gap_tol"]))
+        return original(W, g0, b, e, delta_max, **kw)
+
+    solve_mod.trace_contact_path = keep
+    try:
+        for angle in range(0, 180, 30):
+            for width, rho in ((36, 0.5), (4, 1)):
+                ax = GraspAxis.at(np.array([6.0, 10.0]) * mm, math.radians(angle),
+                                  tuple(pc.centroid))
+                pc.curve(ax, Pad(width * mm, rho * mm), 6 * mm)
+    finally:
+        solve_mod.trace_contact_path = original
+    from deformclosure.contact.path import _trace
+
+    assert len(problems) >= 12 and max(len(p[1]) for p in problems) > 40
+    for W, g0, b, e, dmax, tol in problems:
+        _same_path(_trace(W, g0, b, e, dmax, tol, 10000), _dense_trace(W, g0, b, e, dmax, tol),
+                   dmax)

@@ -181,6 +181,28 @@ def test_a_convex_block_between_flat_pads_is_held_with_friction_only():
     json.dumps(d, allow_nan=False)                     # JSON without infinities
 
 
+def test_friction_stage_budget_stops_early_and_says_so():
+    """A friction stage past its budget (``--max-seconds``) keeps the best separation it
+    evaluated, says ``stopped`` in the JSON (``friction_stage``, ``converged: false``) and
+    prints it; without a budget problem the stage reports its time and no stop."""
+    params = {"axis": "6,10,90", "pad_radius": 0.5, "pad_width": 36, "refine": 1,
+              "grid_angles": 8, "grid_offsets": 25, "friction": 0.5}
+    full = reports.run("optimize", "examples/rectangle.json", params).data
+    assert full["friction_stage"]["stopped"] is None and "stopped" not in full
+    assert 0 < full["friction_stage"]["seconds"] <= full["friction_stage"]["max_seconds"]
+    rep = reports.run("optimize", "examples/rectangle.json", {**params, "max_seconds": 0.05})
+    d = rep.data
+    stage = d["friction_stage"]
+    assert stage["max_seconds"] == 0.05 and stage["stopped"].startswith("friction: time budget")
+    assert d["stopped"] == stage["stopped"] and d["converged"] is False
+    assert any(ln.startswith("friction stage STOPPED EARLY") for ln in rep.lines)
+    # never a silently partial number: Q* is the best of the samples the curve lists, and
+    # no better than the full run's
+    qs = [q for q in d["curve"]["Q"]]
+    assert d["quality"] == (max(qs) if qs else 0.0) <= full["quality"] * (1 + 1e-12)
+    json.dumps(d, allow_nan=False)
+
+
 @pytest.mark.slow
 def test_the_readme_block_is_held_with_friction_to_rtol():
     """The README grasp (4 mm flat faces with 1 mm round ends across the 12 mm width) with

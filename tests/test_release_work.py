@@ -567,3 +567,34 @@ def test_released_axes_and_bad_friction(block):
     for bad in (-0.1, math.nan, math.inf):
         with pytest.raises(GraspError, match="friction"):
             release_work(land, s, sigma, bad)
+
+
+def test_interpolated_move_dissipation_is_the_per_move_sum(block):
+    """:func:`release_work` dissipates each move as ``μ M(σ)`` interpolated on the curve's
+    breakpoints (``M = Λ |S|ᵀ``); the reference is the search as it was written before,
+    with each move's ``μ Σ |f| |slip|`` from the forces at σ (:func:`move_dissipation`),
+    and with the forces passed explicitly (the ``|S| f`` product): the same escape."""
+    land, s, sigma = block
+    for sig in (sigma, sigma * 1.02):
+        ref = dissipative_escape(s, land.neighbours, lambda v, near: land.energy(v, sig),
+                                 lambda v, w: _per_move_at(land, v, w, sig),
+                                 lambda v, e: is_released(land.curve(v), sig))
+        for kw in ({}, {"normal_forces": contact_normal_forces}):
+            got = release_work(land, s, sig, 0.5, **kw)
+            assert got.path == ref.path
+            assert got.work == pytest.approx(ref.work, rel=1e-12)
+            assert got.dissipation == pytest.approx(ref.dissipation, rel=1e-12)
+
+
+def _per_move_at(land, v, w, sig):
+    from deformclosure.pads.release_work import (gripper_centre, move_dissipation, move_slip,
+                                                 row_tangents)
+
+    c = land.curve(v)
+    f = contact_normal_forces(c, sig)
+    if not f.any():
+        return 0.0
+    slip = move_slip(land.solver.mesh.nodes[c.nodes], row_tangents(c.normals),
+                     land.grid.axis(v), gripper_centre(c), land.grid.axis(w),
+                     gripper_centre(land.curve(w)))
+    return move_dissipation(0.5, f, slip)

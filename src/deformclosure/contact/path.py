@@ -199,6 +199,201 @@ def _step_to_bound(x, sol, F, zmask, fixed):  # pragma: no cover - compiled
         fixed[block] = True
 
 
+# ------------------------------------------------------------------ the factored QP
+# The derivative QP of consecutive breakpoints differs by a row or two: its free set's
+# Cholesky factor is kept across the active-set iterations and the pieces of a path, and
+# rows are added (a bordered solve) or removed (a rank-one update of the trailing block)
+# in O(n²) instead of a new O(n³) factorisation per iteration. The factor holds the rows
+# `order[:size]` (global row ids) of the symmetrised, regularised Delassus matrix `Ws`.
+
+
+@njit(cache=True, nogil=True)
+def _factor_append(L, order, size, Ws, i):  # pragma: no cover - compiled
+    """Border the factor with row ``i``; returns the new size (unchanged when the bordered
+    matrix is not numerically positive definite: the caller refactors densely)."""
+    n = size
+    d = Ws[i, i]
+    for a in range(n):
+        v = Ws[order[a], i]
+        for c in range(a):
+            v -= L[a, c] * L[n, c]
+        v /= L[a, a]
+        L[n, a] = v
+        d -= v * v
+    if not d > 1e-14 * Ws[i, i]:
+        return -1
+    L[n, n] = np.sqrt(d)
+    for c in range(n + 1, L.shape[0]):
+        L[n, c] = 0.0
+    order[n] = i
+    return n + 1
+
+
+@njit(cache=True, nogil=True)
+def _factor_remove(L, order, size, k):  # pragma: no cover - compiled
+    """Remove the factor's ``k``-th row: drop it and update the trailing block by the
+    removed column (a rank-one Cholesky update); returns the new size."""
+    n = size
+    # the trailing block gains l lᵀ, l = L[k+1:, k]
+    w = np.empty(n - k - 1)
+    for a in range(k + 1, n):
+        w[a - k - 1] = L[a, k]
+    # shift rows/columns k+1.. up/left by one
+    for a in range(k + 1, n):
+        for c in range(k):
+            L[a - 1, c] = L[a, c]
+        for c in range(k + 1, a + 1):
+            L[a - 1, c - 1] = L[a, c]
+        order[a - 1] = order[a]
+    m = n - k - 1
+    for j in range(m):
+        jj = k + j
+        r = np.sqrt(L[jj, jj] * L[jj, jj] + w[j] * w[j])
+        cs = r / L[jj, jj]
+        sn = w[j] / L[jj, jj]
+        L[jj, jj] = r
+        for a in range(j + 1, m):
+            aa = k + a
+            L[aa, jj] = (L[aa, jj] + sn * w[a]) / cs
+            w[a] = cs * w[a] - sn * L[aa, jj]
+    return n - 1
+
+
+@njit(cache=True, nogil=True)
+def _factor_solve(L, size, r):  # pragma: no cover - compiled
+    """``(L Lᵀ)⁻¹ r`` on the factor's first ``size`` rows."""
+    n = size
+    y = np.empty(n)
+    for a in range(n):
+        v = r[a]
+        for c in range(a):
+            v -= L[a, c] * y[c]
+        y[a] = v / L[a, a]
+    for a in range(n - 1, -1, -1):
+        v = y[a]
+        for c in range(a + 1, n):
+            v -= L[c, a] * y[c]
+        y[a] = v / L[a, a]
+    return y
+
+
+@njit(cache=True, nogil=True)
+def _factor_to(L, order, size, Ws, free, where):  # pragma: no cover - compiled
+    """Make the factor hold exactly the rows with ``free`` set (global row ids); ``where``
+    maps a row to its place in the factor (−1 outside), kept up to date. Returns the size,
+    or −1 if a bordered row was not positive definite (the factor is then invalid)."""
+    k = size - 1
+    while k >= 0:
+        if not free[order[k]]:
+            where[order[k]] = -1
+            size = _factor_remove(L, order, size, k)
+        k -= 1
+    for a in range(size):
+        where[order[a]] = a
+    for i in range(free.shape[0]):
+        if free[i] and where[i] < 0:
+            size = _factor_append(L, order, size, Ws, i)
+            if size < 0:
+                return -1
+            where[i] = size - 1
+    return size
+
+
+@njit(cache=True, nogil=True)
+def _factored_equality_qp(L, order, size, Ws, b, e):  # pragma: no cover - compiled
+    """``[x, μ]`` in the factor's row order: ``W x + μ e = b``, ``eᵀ x = 0`` on the rows
+    ``order[:size]`` (the KKT system of :func:`_equality_qp`) by two solves with the
+    factor."""
+    n = size
+    bf = np.empty(n)
+    ef = np.empty(n)
+    for a in range(n):
+        bf[a] = b[order[a]]
+        ef[a] = e[order[a]]
+    wb = _factor_solve(L, n, bf)
+    we = _factor_solve(L, n, ef)
+    num, den = 0.0, 0.0
+    for a in range(n):
+        num += ef[a] * wb[a]
+        den += ef[a] * we[a]
+    mu = num / den if den != 0.0 else 0.0
+    out = np.empty(n + 1)
+    for a in range(n):
+        out[a] = wb[a] - mu * we[a]
+    out[n] = mu
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _factored_qp(Ws, b, e, J, zmask, fac):  # pragma: no cover - compiled
+    """:func:`_derivative_qp` on the rows ``J`` of ``Ws`` (global ids; ``zmask`` over
+    ``J``) with the kept factor ``fac = (L, order, where, size)``; the same active-set
+    iterations. Returns ``(x over J, μ, size)``; ``size < 0``: the factor broke down."""
+    L, order, where, sz = fac[0], fac[1], fac[2], fac[3][0]
+    nj = J.shape[0]
+    m = Ws.shape[0]
+    x = np.zeros(nj)
+    fixed = zmask.copy()
+    mu = 0.0
+    bscale = 1.0
+    for a in range(nj):
+        bscale = max(bscale, abs(b[J[a]]))
+    tol = 1e-12
+    free = np.zeros(m, np.bool_)
+    for _ in range(20 * nj + 50):
+        F = np.flatnonzero(~fixed)
+        nf = F.shape[0]
+        if nf == 0:
+            arg = -1
+            worst = 0.0
+            for a in range(nj):
+                if b[J[a]] > 0.0 and -b[J[a]] < worst:
+                    worst, arg = -b[J[a]], a
+            if arg < 0:
+                fac[3][0] = sz
+                return x, mu, sz
+            fixed[arg] = False
+            continue
+        free[:] = False
+        for a in range(nf):
+            free[J[F[a]]] = True
+        sz = _factor_to(L, order, sz, Ws, free, where)
+        if sz < 0:
+            fac[3][0] = 0
+            where[:] = -1
+            return x, mu, -1
+        raw = _factored_equality_qp(L, order, sz, Ws, b, e)
+        sol = np.empty(nf + 1)
+        for a in range(nf):
+            sol[a] = raw[where[J[F[a]]]]
+        sol[nf] = raw[sz]
+        pmax, xmax = 0.0, 0.0
+        for a in range(nf):
+            pmax = max(pmax, abs(sol[a] - x[F[a]]))
+            xmax = max(xmax, abs(sol[a]))
+        if pmax <= tol * (1.0 + xmax) * 1e3:
+            mu = sol[nf]
+            for a in range(nf):
+                x[F[a]] = sol[a]
+            # multipliers of the active bounds, ν = W x + μ e − b (Wj = Ws[J, J])
+            worst, arg = -1e-10 * bscale, -1
+            for a in range(nj):
+                if fixed[a]:
+                    nu = -b[J[a]] + mu * e[J[a]]
+                    for c in range(nj):
+                        nu += Ws[J[a], J[c]] * x[c]
+                    if nu < worst:
+                        worst, arg = nu, a
+            if arg < 0:
+                fac[3][0] = sz
+                return x, mu, sz
+            fixed[arg] = False
+            continue
+        _step_to_bound(x, sol, F, zmask, fixed)
+    fac[3][0] = sz
+    return x, 0.0, sz       # no convergence: no drift
+
+
 @njit(cache=True, nogil=True)
 def _trace(W, g0, b, e, delta_max, gap_tol, max_pieces):  # pragma: no cover - compiled
     m = g0.shape[0]
@@ -223,30 +418,50 @@ def _trace(W, g0, b, e, delta_max, gap_tol, max_pieces):  # pragma: no cover - c
     for i in range(m):
         reg += W[i, i]
     reg *= 1e-13 / max(m, 1)
+    # the symmetrised, regularised Delassus matrix of every derivative QP, and its kept
+    # factor (module comment above)
+    Ws = 0.5 * (W + W.T)
+    for i in range(m):
+        Ws[i, i] += reg
+    fac = (np.zeros((m, m)), np.zeros(m, np.int64), np.full(m, -1, np.int64),
+           np.zeros(1, np.int64))
     for _ in range(max_pieces):
         # done at delta_max, to rounding: the last step's end can fall a few ulps short,
         # and a degenerate contact set there can then only take zero-length steps
         # (max_pieces of them, each a full QP: hours on a large mesh)
         if delta >= delta_max or delta_max - delta <= 1e-11 * abs(delta_max):
             break
-        g = g0 - delta * b + W @ lam + e * t
         lam_scale = 1e-300
         for i in range(m):
             lam_scale = max(lam_scale, abs(lam[i]))
         strong = lam > 1e-12 * lam_scale
+        nz = np.flatnonzero(lam)
+        g = g0 - delta * b + e * t
+        for i in range(m):
+            v = 0.0
+            for c in nz:
+                v += W[i, c] * lam[c]
+            g[i] += v
         touching = (~strong) & (g <= gap_tol)
         J = np.flatnonzero(strong | touching)
         nj = J.shape[0]
-        Wj = np.empty((nj, nj))
-        for a in range(nj):
-            for c in range(nj):
-                Wj[a, c] = 0.5 * (W[J[a], J[c]] + W[J[c], J[a]])
-            Wj[a, a] += reg
-        x, dt = _derivative_qp(Wj, b[J], e[J], touching[J])
+        x, dt, ok = _factored_qp(Ws, b, e, J, touching[J], fac)
+        if ok < 0:
+            # the kept factor lost positive definiteness: the dense QP on this piece
+            Wj = np.empty((nj, nj))
+            for a in range(nj):
+                for c in range(nj):
+                    Wj[a, c] = Ws[J[a], J[c]]
+            x, dt = _derivative_qp(Wj, b[J], e[J], touching[J])
         dlam = np.zeros(m)
         for a in range(nj):
             dlam[J[a]] = x[a]
-        dg = W @ dlam + e * dt - b
+        dg = e * dt - b
+        for i in range(m):
+            v = 0.0
+            for a in range(nj):
+                v += W[i, J[a]] * x[a]
+            dg[i] += v
         xs = 1e-300
         for a in range(nj):
             xs = max(xs, abs(x[a]))
@@ -320,5 +535,5 @@ def trace_contact_path(W: np.ndarray, g0: np.ndarray, b: np.ndarray, e: np.ndarr
     WL = L[:-1] @ W
     c0 = 0.5 * np.einsum("ij,ij->i", WL, L[:-1])
     c1 = np.einsum("ij,ij->i", WL, dL)
-    c2 = 0.5 * np.einsum("ij,jk,ik->i", dL, W, dL)
+    c2 = 0.5 * np.einsum("ij,ij->i", dL @ W, dL)
     return ContactPath(D, L, T, np.column_stack([c0, c1, c2]))

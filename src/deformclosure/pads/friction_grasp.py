@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,12 +52,13 @@ from ..landscape.optimum import maximise_sampled
 from .friction import frictional_grasp
 from .landscape import Landscape
 from .optimize import PadGraspResult
-from .refine import DEFAULT_RTOL, RefinedPadGrasp
-from .release_work import (contact_normal_forces, gripper_centre, is_released, move_dissipation,
-                           move_slip, release_work, row_tangents)
+from .refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, RefinedPadGrasp
+from .release_work import (OutOfTime, contact_normal_forces, gripper_centre, is_released,
+                           move_dissipation, move_slip, release_work, row_tangents)
 
-__all__ = ["check_friction", "check_friction_model", "FrictionalLevel", "frictional_level", "FrictionalGrasp",
-           "frictional_refined", "hold_to_dict", "SIGMA_SAMPLES"]
+__all__ = ["check_friction", "check_friction_model", "FrictionalLevel", "frictional_level",
+           "FrictionalGrasp", "FrictionalRefinement", "frictional_refined", "hold_to_dict",
+           "SIGMA_SAMPLES"]
 
 #: σ samples of the sampled σ*-search on ``[σ_L, σ0]`` (then halvings around the best).
 SIGMA_SAMPLES = 12
@@ -123,6 +125,13 @@ class FrictionalLevel:
         :meth:`FrictionalCurve.hold` at σ* (N, N·m; may hold ``±inf``), if computed.
     hold_error : str or None
         Why ``hold`` is missing, if it is.
+    stopped : str or None
+        Why the level's reading stopped early (its time budget): σ* and Q* are then the
+        best of the separations evaluated, and ``U_A_bound`` says whether ``U_A`` is only
+        a lower bound (the search at σ* was cut short above ``U_L``: ``Q = U_L`` is exact).
+    U_A_bound : bool
+    seconds : float
+        Time (s) the level's reading took.
     """
 
     result: PadGraspResult
@@ -136,6 +145,9 @@ class FrictionalLevel:
     path_check: dict | None = None
     hold: dict | None = None
     hold_error: str | None = None
+    stopped: str | None = None
+    U_A_bound: bool = False
+    seconds: float = 0.0
 
 
 def _hole_of(solver, curve) -> int | None:
@@ -147,7 +159,8 @@ def _hole_of(solver, curve) -> int | None:
 
 def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = None,
                      n_samples: int = SIGMA_SAMPLES, hold: bool = False,
-                     forces: str = "frictionless") -> FrictionalLevel:
+                     forces: str = "frictionless",
+                     deadline: float | None = None) -> FrictionalLevel:
     """Re-read one solved level ``res`` with Coulomb coefficient ``mu`` (module docstring).
 
     Parameters
@@ -170,12 +183,18 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
         on a 216-node mesh, thousands of axes). With ``hold`` (or ``"frictional"``) the
         escape path found at σ* is re-evaluated with the frictional forces
         (``path_check``).
+    deadline : float, optional
+        ``time.perf_counter()`` value after which no release-work search runs on (the
+        one under way is abandoned): σ* is the best of the separations evaluated and the
+        level says ``stopped``; the path check is skipped. The hold at σ* is still
+        computed (four loadings of one axis).
 
     Returns
     -------
     FrictionalLevel
     """
     mu = check_friction(mu)
+    t_begin = time.perf_counter()
     if forces not in ("frictionless", "frictional"):
         raise GraspError(f"forces = {forces!r}: choose one of frictionless, frictional")
     if mu == 0.0:
@@ -230,16 +249,17 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
 
     def work(sig: float, stop: float | None = None):
         return release_work(land, s, sig, mu, normal_forces=search_forces, stop_above=stop,
-                            cache=cache)
+                            cache=cache, deadline=deadline)
 
     samples: list[tuple[float, float, float, bool]] = []     # (σ, U_A or bound, U_L, exact)
+    searched: dict[float, object] = {}                        # σ -> its search
 
     def quality(sig: float) -> float:
         UL = U_sL - float(Us(sig))
         if UL <= 0.0:
             samples.append((sig, 0.0, UL, False))
             return 0.0
-        esc = work(sig, stop=UL)       # past U_L the rest of the search cannot matter
+        esc = searched[sig] = work(sig, stop=UL)  # past U_L the rest cannot matter
         # a search stopped above U_L leaves a lower bound; a complete one without a
         # release: no way out (∞)
         ua = esc.work if (esc.released or not esc.complete) else math.inf
@@ -248,15 +268,36 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
 
     lo, hi = sorted((res.sigma_L, res.sigma0))
     rtol = DEFAULT_RTOL if rtol is None else rtol
-    best = maximise_sampled(quality, lo, hi, n_samples, rtol, 1e-4 * (hi - lo))
+    stopped, ua_bound = None, False
+    try:
+        best = maximise_sampled(quality, lo, hi, n_samples, rtol, 1e-4 * (hi - lo))
+    except OutOfTime as err:
+        stopped = (f"friction: time budget ran out in the sigma*-search ({err}; "
+                   f"{len(samples)} separations evaluated)")
+        ranked = sorted(((min(x[1], x[2]), x[0]) for x in samples), reverse=True)
+        best = ranked[0] if ranked and ranked[0][0] > 0 else None
     if best is None:
         sigma_star, UA, UL, esc = None, 0.0, 0.0, None
         q = 0.0
     else:
         sigma_star = best[1]
-        esc = work(sigma_star)
-        UA = esc.work if esc.released else math.inf
         UL = U_sL - float(Us(sigma_star))
+        esc = searched.get(sigma_star)
+        if esc is None or not (esc.released or esc.complete):
+            # the sample's search stopped above U_L (or there was none): the whole search
+            # for U_A and the escape path (a search that released below U_L is this one:
+            # the stop only cuts labels above it)
+            try:
+                esc = work(sigma_star)
+            except OutOfTime:
+                stopped = stopped or "friction: time budget ran out in the search for U_A at sigma*"
+                ua_bound = True
+        if ua_bound:
+            # Q = U_L exactly (the work passes U_L before any release); U_A ≥ that bound
+            UA = max(esc.work, UL) if esc is not None else UL
+            esc = None
+        else:
+            UA = esc.work if esc.released else math.inf
         q = min(UA, UL)
     grid = res.grid
     path = list(esc.path) if esc is not None and esc.released else []
@@ -271,24 +312,26 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
         n_axes=land.n_evaluated)
     # the frictional squeezes of the path's axes cost more than the search on fine
     # meshes: checked where the hold is asked for (the finest level of a run)
+    out_of_time = deadline is not None and time.perf_counter() > deadline
     check = (_path_check(land, path, sigma_star, mu, frictional_forces, cache)
-             if path and (hold or forces == "frictional") else None)
+             if path and (hold or forces == "frictional") and not out_of_time else None)
     if check is not None:
         check["relative"] = (check["work"] - UA) / UA if UA > 0 else None
     fails = len(fallback)
     out = FrictionalLevel(new, res, mu, esc.dissipation if path else math.nan,
                           list(esc.works) if path else [], fails, len(frictional), forces,
-                          check)
+                          check, stopped=stopped, U_A_bound=ua_bound)
     if hold and sigma_star is not None:
         fc = frictional_curve(start_curve)[0]
         if fc is None:
-            return dataclasses.replace(out, hold_error="the frictional squeeze of the start "
-                                       "axis has no quasi-static solution")
-        try:
-            return dataclasses.replace(out, hold=fc.hold(sigma_star))
-        except GraspError as err:
-            return dataclasses.replace(out, hold_error=str(err))
-    return out
+            out = dataclasses.replace(out, hold_error="the frictional squeeze of the start "
+                                      "axis has no quasi-static solution")
+        else:
+            try:
+                out = dataclasses.replace(out, hold=fc.hold(sigma_star))
+            except GraspError as err:
+                out = dataclasses.replace(out, hold_error=str(err))
+    return dataclasses.replace(out, seconds=time.perf_counter() - t_begin)
 
 
 def _sampled_curve(samples: list, Us, force, frictionless: dict) -> dict:
@@ -365,12 +408,16 @@ class FrictionalGrasp:
         The run as solved without friction.
     levels : list of FrictionalLevel
     mu : float
+    budget : dict or None
+        The friction stage's time budget: ``max_seconds``, ``seconds`` (s), ``stopped``
+        (why it stopped early, or ``None``), ``levels_read`` of ``levels``.
     """
 
     refined: RefinedPadGrasp
     frictionless: RefinedPadGrasp
     levels: list = field(default_factory=list)
     mu: float = 0.0
+    budget: dict | None = None
 
     @property
     def finest(self) -> FrictionalLevel:
@@ -392,6 +439,10 @@ class FrictionalGrasp:
             {"forces": "frictional", "work": check["work"], "dissipation": check["dissipation"],
              "relative": check["relative"]},
             "frictional_axes": fin.expanded, "frictionless_fallback": fin.frictionless_vertices}
+        if self.budget is not None:
+            d["friction_stage"] = dict(self.budget, units={"max_seconds": "s", "seconds": "s"})
+        if fin.U_A_bound:
+            d["U_A_lower_bound"] = True
         fl = self.frictionless
         d["frictionless"] = {"sigma_star": fl.finest.sigma_star, "quality": fl.finest.quality,
                              "U_A": None if math.isinf(fl.finest.U_A) else fl.finest.U_A,
@@ -399,17 +450,69 @@ class FrictionalGrasp:
         return d
 
 
+class FrictionalRefinement(RefinedPadGrasp):
+    """The frictional levels as a :class:`~deformclosure.pads.refine.RefinedPadGrasp`
+    (the same error estimate and verdict rules), not converged when a level's reading ran
+    out of its time budget (its σ* is then the best of the separations evaluated)."""
+
+    @property
+    def converged(self) -> bool:
+        return super().converged and not (self.stopped or "").startswith("friction")
+
+
 def frictional_refined(run: RefinedPadGrasp, mu: float, *, hold: bool = True,
-                       n_samples: int = SIGMA_SAMPLES) -> FrictionalGrasp:
+                       n_samples: int = SIGMA_SAMPLES,
+                       max_seconds: float | None = None) -> FrictionalGrasp:
     """Every level of ``run`` read with friction ``mu`` (module docstring); ``hold`` at σ*
-    of the finest level."""
+    of the finest level.
+
+    ``max_seconds`` is the friction stage's time budget (s; default
+    :data:`~deformclosure.pads.refine.DEFAULT_MAX_SECONDS`, as the refinement's and the
+    finite-strain stage's). When it runs out the level being read keeps the best
+    separation it evaluated, the coarser levels are kept, the finer ones are not read
+    (the refinement keeps as many frictional levels as were read), and the result says
+    ``stopped`` — the report's ``stopped``, ``converged: false`` and its
+    ``friction_stage`` entry."""
     mu = check_friction(mu)
     if mu == 0.0:
         raise GraspError("--friction: 0 is the frictionless run itself; give μ > 0")
+    budget = DEFAULT_MAX_SECONDS if max_seconds is None else float(max_seconds)
+    t0 = time.perf_counter()
+    deadline = t0 + budget
     last = len(run.levels) - 1
-    levels = [frictional_level(r, mu, rtol=run.rtol, n_samples=n_samples,
-                               hold=hold and k == last) for k, r in enumerate(run.levels)]
-    refined = dataclasses.replace(run, levels=[lv.result for lv in levels],
-                                  saddles=[lv.result.saddle for lv in levels
-                                           if lv.result.saddle is not None])
-    return FrictionalGrasp(refined, run, levels, mu)
+    levels: list[FrictionalLevel] = []
+    for k, r in enumerate(run.levels):
+        lv = frictional_level(r, mu, rtol=run.rtol, n_samples=n_samples,
+                              hold=hold and k == last, deadline=deadline)
+        levels.append(lv)
+        if lv.stopped:
+            break
+    stopped = next((lv.stopped for lv in levels if lv.stopped), None)
+    if stopped is not None and len(levels) < len(run.levels):
+        stopped += f"; {len(run.levels) - len(levels)} finer level(s) not read with friction"
+        if hold:        # the hold belongs to the finest level read
+            fin = levels[-1]
+            levels[-1] = _with_hold(fin, mu)
+    k = len(levels)
+    refined = FrictionalRefinement(
+        [lv.result for lv in levels], run.max_areas[:k], run.rtol, run.adaptive,
+        stopped if stopped is not None else run.stopped, run.seconds[:k],
+        [lv.result.saddle for lv in levels if lv.result.saddle is not None])
+    return FrictionalGrasp(refined, run, levels, mu,
+                           {"max_seconds": budget, "seconds": time.perf_counter() - t0,
+                            "stopped": stopped,
+                            "levels_read": k, "levels": len(run.levels)})
+
+
+def _with_hold(lv: FrictionalLevel, mu: float) -> FrictionalLevel:
+    """``lv`` with the hold at its σ* (the finest level read when the budget ran out)."""
+    res = lv.result
+    if res.sigma_star is None:
+        return lv
+    try:
+        curve = res.solver.curve(res.start_curve.axis, res.start_curve.pad, res.sigma_L,
+                                 _hole_of(res.solver, res.start_curve))
+        return dataclasses.replace(lv, hold=frictional_grasp(res.solver, curve, mu)
+                                   .hold(res.sigma_star))
+    except GraspError as err:
+        return dataclasses.replace(lv, hold_error=str(err))

@@ -44,6 +44,7 @@ the grid spacing: a move is one grid step (``Δθ = π/n_angles``, ``Δc = D/n_o
 from __future__ import annotations
 
 import math
+import time
 from typing import Callable
 
 import numpy as np
@@ -56,7 +57,12 @@ from .geometry import GraspAxis
 from .landscape import Landscape
 
 __all__ = ["gripper_centre", "row_tangents", "move_slip", "move_dissipation",
-           "contact_normal_forces", "is_released", "release_work"]
+           "contact_normal_forces", "is_released", "release_work", "OutOfTime"]
+
+
+class OutOfTime(Exception):
+    """A :func:`release_work` search passed its ``deadline`` (it is abandoned: no partial
+    work is returned)."""
 
 
 def gripper_centre(curve: GraspCurve) -> np.ndarray | None:
@@ -180,7 +186,8 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
                  normal_forces: Callable[[GraspCurve, float], np.ndarray] | None = None,
                  stop_above: float | None = None,
                  max_evaluations: int | None = None,
-                 cache: dict | None = None) -> DissipativeEscape:
+                 cache: dict | None = None,
+                 deadline: float | None = None) -> DissipativeEscape:
     """Release work ``U_A^μ`` (J) from axis ``start`` at separation ``sigma`` (SPEC §9).
 
     The least, over paths on the landscape's grid to an axis where no pad presses
@@ -207,6 +214,9 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
         Keeps what does not depend on σ between calls on one landscape (a σ*-search asks
         many σ): each vertex's rows and centre, and each move's slips (the rows of a curve
         and the rigid move are the same at every σ; only the forces change).
+    deadline : float, optional
+        ``time.perf_counter()`` value after which the search is abandoned
+        (:class:`OutOfTime` is raised; checked at every vertex energy).
 
     Returns
     -------
@@ -217,15 +227,18 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
     ------
     GraspError
         ``mu`` is not a finite number ≥ 0.
+    OutOfTime
+        The ``deadline`` passed.
     """
     if not (is_finite_number(mu) and mu >= 0):
         raise GraspError(f"friction = {mu!r}: give a friction coefficient μ ≥ 0")
     forces_of = contact_normal_forces if normal_forces is None else normal_forces
     nodes = landscape.solver.mesh.nodes
-    forces: dict[int, np.ndarray] = {}
     store = {} if cache is None else cache
     geometry = store.setdefault("rows", {})       # v -> (points, tangents, centre)
     slips = store.setdefault("slips", {})         # (v, w) -> slip of every row of v
+    moves = store.setdefault("moves", {})         # v -> (neighbour -> k, |slip| (deg, m), M)
+    rows_now: dict[int, np.ndarray | None] = {}   # v -> dissipation of each move at sigma
 
     def rows_of(v: int) -> tuple:
         """Points and tangents of every candidate row of ``v``, and its centre."""
@@ -235,23 +248,66 @@ def release_work(landscape: Landscape, start: int, sigma: float, mu: float, *,
             out = geometry[v] = (nodes[c.nodes], row_tangents(c.normals), gripper_centre(c))
         return out
 
+    def moves_of(v: int) -> tuple:
+        """The moves out of ``v``: each neighbour's place, the rows' |slip| per move and,
+        for the frictionless forces, ``M = Λ |S|ᵀ`` at the curve's breakpoints (the forces
+        are linear in the squeeze between them, so the dissipation of every move is too:
+        ``μ M`` interpolated at σ, one vector per vertex and σ)."""
+        out = moves.get(v)
+        if out is None:
+            P, T, Cv = rows_of(v)
+            grid = landscape.grid
+            nbrs = list(landscape.neighbours(v))
+            S = np.empty((len(nbrs), len(P)))
+            for k, w in enumerate(nbrs):
+                sl = slips.get((v, w))
+                if sl is None:
+                    sl = slips[v, w] = move_slip(P, T, grid.axis(v), Cv, grid.axis(w),
+                                                 gripper_centre(landscape.curve(w)))
+                S[k] = sl
+            S = np.abs(S)
+            path = landscape.curve(v).path
+            M = None if path is None else path.lam @ S.T
+            out = moves[v] = ({w: k for k, w in enumerate(nbrs)}, S, M)
+        return out
+
+    def move_row(v: int) -> np.ndarray | None:
+        """Dissipation (J) of every move out of ``v`` at ``sigma`` (``None``: no force)."""
+        if v in rows_now:
+            return rows_now[v]
+        c = landscape.curve(v)
+        row = None
+        if c.path is not None:
+            at, S, M = moves_of(v)
+            if normal_forces is None:
+                path = c.path
+                delta = c.delta(sigma)
+                if delta > path.delta[0] and len(path.delta) >= 2:
+                    i = int(path.piece(np.array(delta)))
+                    t = (delta - path.delta[i]) / (path.delta[i + 1] - path.delta[i])
+                    row = mu * ((1 - t) * M[i] + t * M[i + 1])
+            else:
+                f = np.abs(np.asarray(forces_of(c, sigma), float))
+                if f.any():
+                    row = mu * (S @ f)
+            if row is not None and not row.any():
+                row = None
+        rows_now[v] = row
+        return row
+
     def dissipation(v: int, w: int) -> float:
         if mu == 0.0:
             return 0.0
-        f = forces.get(v)
-        if f is None:
-            f = forces[v] = np.asarray(forces_of(landscape.curve(v), sigma), float)
-        if not f.any():
+        row = move_row(v)
+        if row is None:
             return 0.0
-        slip = slips.get((v, w))
-        if slip is None:
-            P, T, Cv = rows_of(v)
-            grid = landscape.grid
-            slip = slips[v, w] = move_slip(P, T, grid.axis(v), Cv, grid.axis(w),
-                                           gripper_centre(landscape.curve(w)))
-        return move_dissipation(mu, f, slip)
+        return float(row[moves_of(v)[0][w]])
 
-    return dissipative_escape(start, landscape.neighbours,
-                              lambda v, near: landscape.energy(v, sigma), dissipation,
+    def energy(v: int, near) -> float:
+        if deadline is not None and time.perf_counter() > deadline:
+            raise OutOfTime(f"release work at sigma = {sigma:.6g} m")
+        return landscape.energy(v, sigma)
+
+    return dissipative_escape(start, landscape.neighbours, energy, dissipation,
                               lambda v, e: is_released(landscape.curve(v), sigma),
                               stop_above=stop_above, max_evaluations=max_evaluations)

@@ -332,7 +332,9 @@ def _verify_best(rows: list[dict], mesh, pad: Pad, solver: PadContact, twin: Pad
             if elasticity == "neo-hookean":
                 res = finite_strain_levels(res, elasticity, rtol)
             if friction > 0:
-                res = frictional_refined(res, friction, hold=False).refined
+                left = max(total - (time.perf_counter() - t_start), 1e-3)
+                res = frictional_refined(res, friction, hold=False,
+                                         max_seconds=left / (len(candidates) - n)).refined
             fine, err, verdict = res.finest, res.error_estimate(), res.verdict
             extra = {"converged": res.converged, "n_levels": len(res.levels),
                      "convergence": res.convergence()}

@@ -98,7 +98,8 @@ def _pads(part, p: dict, notify) -> Report:
         res = finite_strain_levels(res, "neo-hookean", rtol, max_seconds=p["max_seconds"])
     fdata, friction_lines = None, []
     if p["friction"] > 0:
-        res, fdata, friction_lines = _with_friction(res, p["friction"], notify)
+        res, fdata, friction_lines = _with_friction(res, p["friction"], notify,
+                                                    p["max_seconds"])
     data = {**(res.to_dict() if fdata is None else fdata), "provenance": provenance(inp.sources)}
     lines = _pads_lines(res, data, pad, inp.unit, scale)
     lines[-1:-1] = friction_lines
@@ -124,14 +125,14 @@ def _check_friction_request(p: dict, model: str) -> None:
     check_friction_model(mu, p.get("elasticity"))
 
 
-def _with_friction(res, mu: float, notify):
+def _with_friction(res, mu: float, notify, max_seconds: float | None = None):
     """The refined grasp read with friction μ (:mod:`deformclosure.pads.friction_grasp`)
     and its summary lines (hold at σ*, the release work's dissipation)."""
     from ..pads.friction_grasp import frictional_refined
 
     if notify is not None:
         notify(f"friction mu = {mu:g}: release work with dissipation ...")
-    fr = frictional_refined(res, mu)
+    fr = frictional_refined(res, mu, max_seconds=max_seconds)
     data = fr.to_dict()
     return fr.refined, data, friction_lines(data)
 
@@ -166,6 +167,13 @@ def friction_lines(data: dict) -> list[str]:
                      f"{show('force', 'N')}{carries}; torque {show('torque', 'N*m')}")
     elif hold is not None:
         lines.append(f"hold at sigma*: not computed ({hold['reason']})")
+    stage = data.get("friction_stage") or {}
+    if stage.get("stopped"):
+        lines.append(f"friction stage STOPPED EARLY after {stage['seconds']:.0f} s (budget "
+                     f"{stage['max_seconds']:g} s, --max-seconds): "
+                     f"{stage['stopped'].removeprefix('friction: ')}; sigma* "
+                     "and Q* are the best of the separations evaluated"
+                     + (", U_A only a lower bound" if data.get("U_A_lower_bound") else ""))
     dis = data.get("dissipation")
     fl = data["frictionless"]
     lines.append(f"release work with friction: U_A = "
