@@ -314,8 +314,11 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
         if r is None:
             if deadline is not None and time.perf_counter() > deadline:
                 raise _OutOfTime
-            rel = land.release(s, sig, tau)
             UL = U_sL - start.energy_at(sig)
+            # Q = min(U_A, U_L): the search need not climb above U_L (it stops there, and
+            # the release is then a lower bound of U_A, Landscape.release's ``cap``)
+            cap = UL if math.isfinite(UL) and UL > 0 else None
+            rel = land.release(s, sig, tau, cap)
             r = evals[sig] = (rel, UL, min(rel.U_A, UL))
         return r[2]
 
@@ -333,6 +336,9 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
     sigma_star = None if best is None else best[1]
     sig_e = sigma0 if sigma_star is None else sigma_star
     rel, UL, Q = evals[sig_e] if sig_e in evals else (land.release(s, sig_e, tau), 0.0, 0.0)
+    if rel.bounded:
+        # σ*'s own barrier and escape path (the σ-search only needed U_A > U_L there)
+        rel = land.release(s, sig_e, tau)
     barrier = rel.strict and math.isfinite(rel.U_A) and sigma_star is not None
     path = [grid.axis(v) for v in rel.path] if barrier else []
     force = stiffness = strain = None
@@ -356,14 +362,17 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
 
 def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
     """The evaluated separations, in order: ``sigma`` (m), ``U``, ``U_A``, ``U_L``, ``Q``
-    (J), ``F`` (N); ``None`` for ∞."""
+    (J), ``F`` (N); ``None`` for ∞. ``U_A_lower_bound``: where the search stopped above
+    ``U_L`` (``U_A`` is then only known to exceed it, and ``Q = U_L``)."""
     sig = sorted(evals)
 
     def num(v: float):
         return float(v) if math.isfinite(v) else None
 
     return {"sigma": sig, "U": [num(start.energy_at(x)) for x in sig],
-            "U_A": [num(evals[x][0].U_A) for x in sig], "U_L": [num(evals[x][1]) for x in sig],
+            "U_A": [num(evals[x][0].U_A) for x in sig],
+            "U_A_lower_bound": [bool(evals[x][0].bounded) for x in sig],
+            "U_L": [num(evals[x][1]) for x in sig],
             "Q": [num(evals[x][2]) for x in sig], "F": [num(start.axial_force(x)) for x in sig]}
 
 

@@ -150,12 +150,16 @@ class Release:
         Vertex holding the barrier's maximum energy.
     path : list of int
         Minimax path, start first, ending at another equilibrium (empty if not strict).
+    bounded : bool
+        The search stopped once the barrier exceeded the ``cap`` it was given: ``U_A`` is
+        then a lower bound (``> cap``), ``saddle`` None and ``path`` empty.
     """
 
     U_A: float
     strict: bool
     saddle: int | None
     path: list[int]
+    bounded: bool = False
 
 
 class Landscape:
@@ -274,22 +278,29 @@ class Landscape:
             out = self._nbrs[v] = self.grid.neighbours(v)
         return out
 
-    def release(self, start: int, sigma: float, noise: float = 0.0) -> Release:
+    def release(self, start: int, sigma: float, noise: float = 0.0,
+                cap: float | None = None) -> Release:
         """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
 
         ``noise`` is the relative noise floor: two energies closer than ``noise`` × the
         larger are a tie. A start with zero energy holds nothing (``U_A = 0``, SPEC §7's
         released placement). The start must exceed no neighbour within it (else ``U_A = 0``),
         and a barrier within it of the start's energy is no barrier (``U_A = 0``).
-        Computed once per ``(start, sigma, noise)``.
+        ``cap`` (J): only whether ``U_A`` exceeds it matters (e.g. ``Q = min(U_A, U_L)``
+        with ``cap = U_L``): the search stops at that level and the result is
+        :attr:`Release.bounded`. Computed once per ``(start, sigma, noise, cap)``; an
+        uncapped result answers every cap.
         """
-        key = (start, sigma, noise)
-        out = self._releases.get(key)
+        out = self._releases.get((start, sigma, noise, None))
         if out is None:
-            out = self._releases[key] = self._release(start, sigma, noise)
+            key = (start, sigma, noise, cap)
+            out = self._releases.get(key)
+            if out is None:
+                out = self._releases[key] = self._release(start, sigma, noise, cap)
         return out
 
-    def _release(self, start: int, sigma: float, noise: float) -> Release:
+    def _release(self, start: int, sigma: float, noise: float,
+                 cap: float | None = None) -> Release:
         g, nbrs = self.grid, self.neighbours
         E: dict[int, float] = {}
 
@@ -302,7 +313,9 @@ class Landscape:
         if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.start_neighbours(start)):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
-        esc = minimax_escape(start, nbrs, U)       # SPEC §4's exact equilibrium test
+        esc = minimax_escape(start, nbrs, U, stop_above=cap)   # SPEC §4's exact test
+        if not esc.complete:
+            return Release(esc.barrier - Us, True, None, [], bounded=True)
         if esc.target is None:
             return Release(math.inf, True, None, [])
         b = esc.barrier
