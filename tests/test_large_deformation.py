@@ -260,3 +260,34 @@ def test_elastic_limit_does_not_depend_on_the_bracketing_step(monkeypatch):
         out.append(lim.sigma_L)
         assert c.strain(lim.sigma_L) == pytest.approx(0.3, abs=2e-3)
     assert out[0] == pytest.approx(out[1], abs=2e-6 * c.sigma0)
+
+
+@pytest.mark.slow
+def test_a_level_the_budget_left_unevaluated_is_dropped(monkeypatch):
+    """Two uniform levels of the notched bar; the budget runs out before the finer level
+    evaluates any separation: that level is left out (its Q = 0 is no value), the coarse
+    level is the answer and the refinement says it stopped, not converged."""
+    import time as _time
+
+    from deformclosure import Part
+    from deformclosure.pads import finite_strain_grasp as fsg
+    from deformclosure.pads.geometry import GraspAxis, Pad
+    from deformclosure.pads.refine import pad_grasp
+
+    part = Part.from_file("examples/notched_bar.json")
+    axis = GraspAxis.through([15e-3, 0.0], [15e-3, 12e-3])
+    refined = pad_grasp(part, axis, Pad(0.0, 2e-3), refine=2, max_area=1.0e-6)
+    real = fsg.optimize_finite_strain
+    calls = []
+
+    def budgeted(mesh, linear, **kw):
+        calls.append(mesh.n_nodes)
+        kw["deadline"] = None if len(calls) == 1 else _time.perf_counter() - 1.0
+        return real(mesh, linear, **kw)
+
+    monkeypatch.setattr(fsg, "optimize_finite_strain", budgeted)
+    out = fsg.finite_strain_levels(refined)
+    assert len(calls) == 2 and calls[0] < calls[1]
+    assert len(out.levels) == 1 and out.levels[0].n_nodes == calls[0]
+    assert out.levels[0].quality > 0 and out.levels[0].curve["sigma"]
+    assert out.stopped and "not evaluated" in out.stopped and not out.converged

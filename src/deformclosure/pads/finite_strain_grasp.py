@@ -411,9 +411,18 @@ def finite_strain_levels(refined, elasticity: str = "neo-hookean", rtol: float |
         nl.append(optimize_finite_strain(r.solver.mesh, r, elasticity=elasticity, rtol=rt,
                                          deadline=deadline))
         seconds.append(time.perf_counter() - t0)
-    k = len(nl)
+    areas = list(refined.max_areas[-len(nl):])
     stopped = next((f"finite strain: {x.stopped}" for x in nl if x.stopped), refined.stopped)
-    return FiniteStrainRefinement(nl, refined.max_areas[-k:], refined.rtol, refined.adaptive,
+    # A level the budget ended before it evaluated any separation has no finite-strain
+    # value (its "Q = 0" would read as "no barrier"): it is left out, and the refinement
+    # is not converged (``stopped``).
+    keep = [i for i, x in enumerate(nl) if x.curve["sigma"] or not x.stopped]
+    if keep and len(keep) < len(nl):
+        nl = [nl[i] for i in keep]
+        areas = [areas[i] for i in keep]
+        seconds = [seconds[i] for i in keep]
+        stopped = "finite strain: time budget (a finer level not evaluated)"
+    return FiniteStrainRefinement(nl, areas, refined.rtol, refined.adaptive,
                                   stopped, seconds, refined.saddles)
 
 
