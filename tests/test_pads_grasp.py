@@ -236,3 +236,26 @@ def test_expanding_curve_is_an_exact_contact_solution():
         lam = c.path.multipliers(c.delta(m))
         f = pc.load_vector(c, lam)
         assert 0.5 * f @ pc.displacement(f) == pytest.approx(c.energy_at(m), rel=1e-9)
+
+
+def test_capped_release_gives_the_same_quality(notched_coarse):
+    """Landscape.release with a cap (the finite-strain σ*-search's ``cap = U_L``): where it
+    stops early its U_A is a lower bound above the cap and below the full search's; where it
+    does not, it is the full search's result; so min(U_A, cap) is the same either way."""
+    mesh, pc, res = notched_coarse
+    s = res.grid.vertex(0, 0)
+    full = Landscape(pc, res.pad, res.grid, res.sigma_L)
+    capped = Landscape(pc, res.pad, res.grid, res.sigma_L)
+    n_bounded = 0
+    for x in np.linspace(res.sigma_L, res.sigma0, 9)[1:-1]:
+        ref = full.release(s, float(x))
+        for frac in (0.05, 0.5, 0.95, 2.0):
+            cap = frac * ref.U_A if np.isfinite(ref.U_A) and ref.U_A > 0 else frac * 1e-3
+            r = capped.release(s, float(x), 0.0, cap)
+            if r.bounded:
+                n_bounded += 1
+                assert cap < r.U_A <= ref.U_A and r.path == [] and r.saddle is None
+            else:
+                assert (r.U_A, r.path, r.saddle) == (ref.U_A, ref.path, ref.saddle)
+            assert min(r.U_A, cap) == min(ref.U_A, cap)
+    assert n_bounded > 0
