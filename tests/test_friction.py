@@ -66,8 +66,9 @@ SIGMA = 19 * MM                     # a 1 mm squeeze
 def _gross_slip_force(pc, fc, sigma, sign):
     """The cross-axis load at gross slip, from its own linear problem: the face rows in
     contact and slipping the way the load pulls (``τ = −μ λ σ``), the pads fixed, the axial
-    float and the rotation free (their forces balance), the torque that of the squeeze;
-    the other candidate rows (on the block's sides) stay open."""
+    float and the rotation free (their forces balance), no external torque (the gauge
+    released: :meth:`FrictionalCurve.hold` loads from zero); the other candidate rows (on
+    the block's sides) stay open."""
     c = fc.curve
     a, nx = c.axis.direction, c.axis.normal
     P = pc.mesh.nodes[c.nodes]
@@ -88,7 +89,6 @@ def _gross_slip_force(pc, fc, sigma, sign):
     tau_of = -fc.mu * sig                            # τ = tau_of λ
     e = nrm @ a + tau_of * (tan @ a)                 # axial component of each row's force
     m = cross(nrm) + tau_of * cross(tan)             # its moment
-    _, M0 = fc.gauge_reaction(sigma)
     M = Wnn + Wnt * tau_of[None, :]                  # gaps per normal force, slipping
     on = np.ones(r, bool)
     for _ in range(2 * r):
@@ -101,7 +101,7 @@ def _gross_slip_force(pc, fc, sigma, sign):
         A[:k, k + 1] = cross(nrm)[J]                 # and the rotation φ
         A[k, :k] = e[J]
         A[k + 1, :k] = m[J]
-        sol = np.linalg.solve(A, np.r_[-q[J], 0.0, -M0])
+        sol = np.linalg.solve(A, np.r_[-q[J], 0.0, 0.0])
         lam = np.zeros(r)
         lam[J] = sol[:k]
         g = q + M @ lam + (nrm @ a) * sol[k] + cross(nrm) * sol[k + 1]
@@ -136,14 +136,48 @@ def test_block_holding_force_is_mu_times_pad_forces(max_area):
     assert hold["torque"] == [-math.inf, math.inf]
     # flat pads add no geometric resistance to a cross force: friction's limit is the hold
     assert hold["slide"]["force"] == hold["force"]
-    # and under a torque the jammed corners stick for ever: friction is never exhausted
-    assert hold["slide"]["torque"] == [-math.inf, math.inf]
+    assert hold["limited_by"] == {"force": ["friction", "friction"],
+                                  "torque": ["geometry", "geometry"]}
+    # under a torque every row ends up sliding (the friction is exhausted) at a finite
+    # load, the same either way for a symmetric block; beyond it the corners jam
+    t_minus, t_plus = hold["slide"]["torque"]
+    assert t_minus < 0 < t_plus and math.isfinite(t_minus) and math.isfinite(t_plus)
+    assert -t_minus == pytest.approx(t_plus, rel=2e-2)
+    # the loads start from zero: the gauge reaction of a symmetric block is mesh noise
+    assert abs(hold["gauge_reaction"]["force"]) < 1e-3 * f_plus
 
 
 def test_frictionless_block_holds_no_cross_force():
     _, pc, curve = _pinch(2.0)
     hold = frictional_grasp(pc, curve, 0.0).hold(SIGMA)
     assert hold["force"] == [0.0, 0.0] or max(map(abs, hold["force"])) < 1e-12
+    # without friction the block slides out with its own (mesh-noise) gauge reaction, or
+    # lets go at once: either way nothing is held across the axis
+    assert set(hold["limited_by"]["force"]) <= {"unbalanced", "friction"}
+
+
+def test_hold_keeps_to_its_deadline_and_says_so():
+    """A hold whose time budget has passed traces nothing: every entry ``budget``,
+    ``nan`` (``null`` in the report with the reason), ``stopped`` set, not cached (the
+    same call without a deadline gives the full hold)."""
+    import time
+
+    from deformclosure.pads.friction_grasp import hold_to_dict
+    from deformclosure.reports.optimize import friction_lines
+
+    _, pc, curve = _pinch(2.0)
+    fc = frictional_grasp(pc, curve, 0.5)
+    cut = fc.hold(SIGMA, deadline=time.perf_counter() - 1.0)
+    assert cut["stopped"] and all(k == "budget" for v in cut["limited_by"].values() for k in v)
+    assert all(math.isnan(x) for x in cut["force"] + cut["torque"])
+    d = hold_to_dict(cut)
+    assert d["force"] == [None, None] and d["torque"] == [None, None]
+    assert d["reason"].startswith("time budget")
+    lines = friction_lines({"hold": d, "friction": 0.5, "U_A_infinite": False, "U_A": 1.0,
+                            "frictionless": {"quality": 0.0, "verdict": "not held"}})
+    assert any("TRUNCATED" in ln for ln in lines) and "?" in lines[0]
+    full = fc.hold(SIGMA)
+    assert full["stopped"] is None and full["limited_by"]["force"] == ["friction", "friction"]
 
 
 # ----------------------------------------------------------------- 2. μ → 0

@@ -224,6 +224,62 @@ def test_the_readme_block_is_held_with_friction_to_rtol():
     assert abs(d["release_work"]["path_check"]["relative"]) < 0.05
 
 
+def _walk(x):
+    """Every number in a JSON-like value."""
+    if isinstance(x, dict):
+        for v in x.values():
+            yield from _walk(v)
+    elif isinstance(x, (list, tuple)):
+        for v in x:
+            yield from _walk(v)
+    elif isinstance(x, float):
+        yield x
+
+
+def test_hold_on_round_pads_is_geometric_and_its_loads_start_from_zero():
+    """The L-shape pressed into round pads (``--axis 4,10,0 --pad-radius 1``, μ = 0.5)
+    on one mesh and on the default refinement: every load is applied from zero external
+    load, so ``− ≤ 0 ≤ +`` in every entry (no negative "margins"); an entry limited by
+    friction equals its ``slide`` load; one limited by geometry (load carried after every
+    contact slides: the part wedged on the pads' curvature) is ``null`` with its
+    friction-exhausted ``slide`` load finite and the out-of-range linear limit apart in
+    ``geometric_limit``, at least as large; the JSON is valid (no infinity, no NaN, no
+    ``-0.0``); the printed line shows what the JSON says."""
+    from deformclosure.pads.friction_grasp import HOLD_LIMITS
+
+    for refine in (1, None):
+        params = {"axis": "4,10,0", "pad_radius": 1, "friction": 0.5}
+        rep = reports.run("optimize", "examples/l_shape.json",
+                          params if refine is None else {**params, "refine": refine})
+        _check_hold_report(rep, HOLD_LIMITS)
+
+
+def _check_hold_report(rep, limits):
+    h = rep.data["hold"]
+    json.dumps(h, allow_nan=False)
+    assert all(math.copysign(1.0, x) > 0 for x in _walk(h) if x == 0.0)
+    shown = []
+    for key in ("force", "torque"):
+        for j, kind in enumerate(h["limited_by"][key]):
+            assert kind in limits and kind != "budget"
+            for pair in (h[key], h["slide"][key], h["geometric_limit"][key]):
+                x = pair[j]
+                assert x is None or (x <= 0 if j == 0 else x >= 0)
+            v, g, sl = h[key][j], h["geometric_limit"][key][j], h["slide"][key][j]
+            if kind == "friction":
+                assert v == sl and g is None
+            elif kind == "geometry":
+                assert v is None and (g is None or abs(g) >= abs(sl))
+            shown.append(v if kind != "geometry" else sl)
+    if any(k == "geometry" for v in h["limited_by"].values() for k in v):
+        assert "geometry" in h["reason"]
+    line = next(ln for ln in rep.lines if ln.startswith("hold at sigma*"))
+    lo, hi = shown[:2]
+    if lo is not None and hi is not None:
+        assert f"{lo:+.4g} .. {hi:+.4g} N" in line
+    assert "-0 " not in line
+
+
 # --------------------------------------------------------------------------- refusals
 @pytest.mark.parametrize("bad", [-0.1, math.nan, math.inf, "0.5", True])
 def test_check_friction_refuses_what_is_not_a_coefficient(bad):

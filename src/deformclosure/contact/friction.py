@@ -49,6 +49,7 @@ optimalities", IJRR 33(6), 2014 (event-driven stick/slip on a linear FEM part).
 from __future__ import annotations
 
 import itertools
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -172,6 +173,9 @@ class FrictionPath:
         parameter cannot grow beyond ``p[-1]``).
     ok : bool
         False when no consistent modes exist (the quasi-static path ends there).
+    stopped : bool
+        True when the tracing stopped at its ``deadline`` (:func:`trace_friction`) before
+        ``p_end``, a limit or an end of the quasi-static path.
     """
 
     p: np.ndarray
@@ -183,6 +187,7 @@ class FrictionPath:
     energy_coef: np.ndarray
     limit: bool = False
     ok: bool = True
+    stopped: bool = False
 
     def piece(self, p: float) -> int:
         """Index of the piece holding ``p`` (clipped to the traced range)."""
@@ -426,7 +431,8 @@ def _choose_modes(prob, st: FrictionState, cands):
 
 
 def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
-                   gap_tol: float, max_pieces: int = 20000) -> FrictionPath:
+                   gap_tol: float, max_pieces: int = 20000,
+                   deadline: float | None = None) -> FrictionPath:
     """Follow the frictional path of ``prob`` from ``start`` to ``p_end`` (module docstring).
 
     Parameters
@@ -440,6 +446,9 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
         Gaps below this (m) count as closed.
     max_pieces : int
         Most pieces traced.
+    deadline : float, optional
+        ``time.perf_counter()`` value after which no further piece is traced (the path
+        ends at its last breakpoint with ``stopped = True``).
 
     Returns
     -------
@@ -468,9 +477,12 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
     P, L, T, Yv, S, M = [start.p], [start.lam.copy()], [start.tau.copy()], [start.y.copy()], \
         [start.slip.copy()], []
     st = start
-    limit, ok = False, True
+    limit, ok, stopped = False, True, False
     for _ in range(max_pieces):
         if st.p >= p_end:
+            break
+        if deadline is not None and time.perf_counter() > deadline:
+            stopped = True
             break
         g = prob.gaps(st.p, st.lam, st.tau, st.y)
         lam_scale = max(np.abs(st.lam).max(initial=0.0), 1e-300)
@@ -550,5 +562,5 @@ def trace_friction(prob: FrictionProblem, start: FrictionState, p_end: float, *,
         coef = np.zeros((0, 3))
         modes = np.zeros((0, r), int)
     return FrictionPath(P, Lm, Tm, np.array(Yv).reshape(len(P), k), np.array(S), modes, coef,
-                        limit, ok)
+                        limit, ok, stopped)
 

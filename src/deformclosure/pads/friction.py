@@ -19,22 +19,29 @@ torque that keeps the part on the axis while it is squeezed (zero for a symmetri
 
 **Holding force and torque.** At ``σ``, from the frictional state reached by the squeeze
 (path-dependent), the cross-axis translation ``v`` and the rotation ``φ`` become free and
-an external load with the gauge's distributions takes the gauge reaction's place:
-``P = P0 + α d`` with ``d`` a unit cross-axis force (N) or a unit torque (N·m) of either
-sign. The same event-driven solver follows ``α`` with the pads fixed until no finite rate
-exists (every row that could hold has reached the cone: gross slip); ``hold`` is the
-external load there, ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m)}`` (``f− ≤ P0 ≤
-f+``). A grasp the linearised kinematics never lets go of has ``±inf``: a block between
-fixed flat pads jams under a torque (its diagonal is longer than the pad separation),
-and a part pressed into round pads on both flanks of their apex is wedged across the
-axis, friction or not — that resistance is geometric (leaving it is large motion: the
-release landscape's question). ``hold["slide"]`` gives, for the same loads, where every
-contact row first slides (the friction is exhausted); for flat pads under a cross force
-it equals the hold (``docs/friction.md``).
+an external load with the gauge's distributions takes the gauge reaction's place. First
+the gauge reaction ``P0`` is taken off incrementally (external load ``P0 → 0``: the part
+in the gripper alone; if it slips out on the way it is not held, ``"unbalanced"``), then
+the load ``α d`` is applied with ``d`` a unit cross-axis force (N) or a unit torque (N·m)
+of either sign, the other component zero. The same event-driven solver follows ``α``
+with the pads fixed until no finite rate exists (every row that could hold has reached
+the cone: gross slip); ``hold`` is the external load there, ``{"force": [f−, f+] (N),
+"torque": [t−, t+] (N·m)}`` with ``f− ≤ 0 ≤ f+`` — the load needed to dislodge the part
+each way. A grasp the linearised kinematics never lets go of has ``±inf``: a block
+between fixed flat pads jams under a torque (its diagonal is longer than the pad
+separation), and a part pressed into round pads on both flanks of their apex is wedged
+across the axis, friction or not — that resistance is geometric (leaving it is large
+motion: the release landscape's question). ``hold["slide"]`` gives, for the same loads,
+where every contact row first slides (the friction is exhausted) and
+``hold["limited_by"]`` names what ends each entry (``"friction"``: gross slip as the last
+row slides, the entry equals ``slide``; ``"geometry"``: load carried beyond that;
+``"dynamic"``, ``"unbalanced"``, ``"budget"``; :meth:`FrictionalCurve.hold`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -301,12 +308,48 @@ class FrictionalCurve:
         reached = bool(path.ok and path.p[-1] >= 1.0)
         return LoadedGrasp(path.state(float(path.p[-1])), path, reached)
 
-    def hold_limit(self, sigma: float, direction: np.ndarray) -> tuple[float, float]:
-        """Load factors ``α`` (≥ 0) of the external load ``P0 + α direction``: before gross
-        slip (``inf`` if none), and where every contact row first slides (friction
-        exhausted; ``≤`` the first)."""
-        lp, st = self.loading_problem(sigma, np.asarray(direction, float))
-        path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol)
+    def _released(self, sigma: float, deadline: float | None = None):
+        """The loading problem at ``sigma`` (m) and the state with the gauge released: the
+        gauge reaction ``P0`` taken off incrementally (external load ``P0 → 0``).
+        Returns ``(problem, state, ended)``: ``problem`` has its ``α = 0`` at zero external
+        load, ``ended`` is ``None`` or why the release did not reach zero load
+        (``"unbalanced"``: gross slip or no quasi-static rate on the way — the part is not
+        held without the gauge; ``"budget"``: the deadline passed)."""
+        P0 = np.array(self.gauge_reaction(sigma))
+        lp, st = self.loading_problem(sigma, -P0)
+        if P0.any():
+            path = trace_friction(lp, st, 1.0, gap_tol=self.gap_tol, deadline=deadline)
+            if path.stopped:
+                return lp, st, "budget"
+            if not (path.ok and not path.limit and path.p[-1] >= 1.0):
+                return lp, st, "unbalanced"
+            end = path.state(1.0)
+            st = FrictionState(0.0, end.lam, end.tau, end.y, end.slip, end.mode)
+        zero = dataclasses.replace(lp, load=lp.load + lp.load_rate,
+                                   load_rate=np.zeros_like(lp.load_rate))
+        return zero, st, None
+
+    def hold_limit(self, sigma: float, direction: np.ndarray, *, deadline: float | None = None,
+                   released=None) -> tuple[float, float, str]:
+        """Load factors ``α`` (≥ 0) of the external load ``α direction`` (``direction =
+        [force (N), torque (N·m)]``) applied after the gauge's release (zero external
+        load; :meth:`hold`): before gross slip (``inf`` if none), where every contact row
+        first slides (friction exhausted; ``≤`` the first), and what limits it:
+        ``"friction"`` (gross slip as the last row slides), ``"dynamic"`` (the
+        quasi-static path ends, no consistent stick/slip rate, before every row slides), ``"geometry"`` (the part
+        carries load after every row slides, or for ever: wedged on the pads' curvature or
+        jammed), ``"budget"`` (``deadline`` passed: both ``nan``) or ``"unbalanced"``
+        (the part is not held at zero load: both 0)."""
+        lp, st, ended = self._released(sigma, deadline) if released is None else released
+        if ended == "unbalanced":
+            return 0.0, 0.0, ended
+        if ended == "budget":
+            return float("nan"), float("nan"), ended
+        d = np.asarray(direction, float)
+        lp = dataclasses.replace(lp, load_rate=-np.r_[0.0, d])
+        path = trace_friction(lp, st, np.inf, gap_tol=self.gap_tol, deadline=deadline)
+        if path.stopped:
+            return float("nan"), float("nan"), "budget"
         # No finite rate (gross slip), or no consistent stick/slip rate at all (the
         # quasi-static path ends in a dynamic slip, as in Klarbring's examples for large μ):
         # either way the grasp lets go beyond this load.
@@ -316,27 +359,62 @@ class FrictionalCurve:
             if (mode != OPEN).any() and not (mode == STICK).any():
                 slide = float(path.p[i])
                 break
-        return limit, slide
+        # load carried after every row slides is not friction's: the pads' curvature (or
+        # a block's corners) resist — whether the linear path then ends in a dynamic slip
+        # (far beyond small displacements, e.g. 47 kN on the L-shape's round pads) or never
+        if limit > slide * (1 + 1e-9) + 1e-300 or not np.isfinite(limit):
+            kind = "geometry"
+        elif not path.ok:
+            kind = "dynamic"
+        else:
+            kind = "friction"
+        return limit, slide, kind
 
-    def hold(self, sigma: float) -> dict:
-        """Holding force and torque at ``sigma`` (m) (module docstring):
-        ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m), "slide": {"force": [..],
-        "torque": [..]}}`` — ``slide``: the loads at which every contact row first slides
-        (the friction is exhausted). For flat pads the two agree; where the pads' curvature
-        wedges the part or it jams, the linear kinematics holds beyond ``slide`` (up to
-        ``±inf``): that resistance is geometric, and its strength is the release
-        landscape's question (SPEC §6, §9), not friction's."""
+    def hold(self, sigma: float, *, deadline: float | None = None) -> dict:
+        """Holding force and torque at ``sigma`` (m) (module docstring), the external load
+        beyond which the part lets go, from zero external load (the gauge reaction
+        released first): ``{"force": [f−, f+] (N), "torque": [t−, t+] (N·m), "slide":
+        {"force", "torque"}, "limited_by": {"force": [k−, k+], "torque": [..]},
+        "gauge_reaction": {"force" (N), "torque" (N·m)}, "stopped": None or why}`` with
+        ``f− ≤ 0 ≤ f+`` (the force applied the negative way is negative), each a load in
+        one direction with the other component zero. ``slide``: the loads at which every
+        contact row first slides (the friction is exhausted); ``limited_by`` per entry:
+        ``"friction"`` (gross slip: the entry equals ``slide``; for flat pads),
+        ``"dynamic"`` (the quasi-static path ends there, before every row slides),
+        ``"geometry"`` (wedged on the pads' curvature or jammed: the linear kinematics carries load beyond ``slide``, up
+        to the entry, ``±inf`` if for ever — that resistance is geometric, its strength the
+        release landscape's question, SPEC §6, §9), ``"unbalanced"`` (the squeeze's
+        resultant cannot be carried once the gauge is released: 0, not held at zero load)
+        or ``"budget"`` (``deadline``, a ``time.perf_counter()`` value, passed first:
+        ``nan``; ``stopped`` says so)."""
         key = float(sigma)
         if key in self._cache:
             return self._cache[key]
         F0, M0 = self.gauge_reaction(sigma)
-        lim = {k: self.hold_limit(sigma, d) for k, d in
-               (("f-", [-1.0, 0.0]), ("f+", [1.0, 0.0]), ("t-", [0.0, -1.0]), ("t+", [0.0, 1.0]))}
-        out = {"force": [F0 - lim["f-"][0], F0 + lim["f+"][0]],
-               "torque": [M0 - lim["t-"][0], M0 + lim["t+"][0]],
-               "slide": {"force": [F0 - lim["f-"][1], F0 + lim["f+"][1]],
-                         "torque": [M0 - lim["t-"][1], M0 + lim["t+"][1]]}}
-        self._cache[key] = out
+        out = {"force": [0.0, 0.0], "torque": [0.0, 0.0],
+               "slide": {"force": [0.0, 0.0], "torque": [0.0, 0.0]},
+               "limited_by": {"force": ["", ""], "torque": ["", ""]},
+               "gauge_reaction": {"force": F0 + 0.0, "torque": M0 + 0.0}, "stopped": None}
+        released = None
+        if deadline is not None and time.perf_counter() > deadline:
+            released = (None, None, "budget")
+        else:
+            released = self._released(sigma, deadline)
+        for key2, j, d in (("force", 0, [-1.0, 0.0]), ("force", 1, [1.0, 0.0]),
+                           ("torque", 0, [0.0, -1.0]), ("torque", 1, [0.0, 1.0])):
+            if released[2] is None and deadline is not None and time.perf_counter() > deadline:
+                lim, sl, kind = float("nan"), float("nan"), "budget"
+            else:
+                lim, sl, kind = self.hold_limit(sigma, d, deadline=deadline, released=released)
+            sign = -1.0 if j == 0 else 1.0
+            out[key2][j] = sign * lim + 0.0
+            out["slide"][key2][j] = sign * sl + 0.0
+            out["limited_by"][key2][j] = kind
+        if any(k == "budget" for v in out["limited_by"].values() for k in v):
+            out["stopped"] = ("time budget (--max-seconds) spent before the holding loads "
+                              "were traced to their limit")
+        else:
+            self._cache[key] = out          # a truncated hold is not kept
         return out
 
 

@@ -58,6 +58,7 @@ from .release_work import (OutOfTime, contact_normal_forces, gripper_centre, is_
 
 __all__ = ["check_friction", "check_friction_model", "FrictionalLevel", "frictional_level",
            "FrictionalGrasp", "FrictionalRefinement", "frictional_refined", "hold_to_dict",
+           "HOLD_LIMITS",
            "SIGMA_SAMPLES"]
 
 #: σ samples of the sampled σ*-search on ``[σ_L, σ0]`` (then halvings around the best).
@@ -186,8 +187,9 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
     deadline : float, optional
         ``time.perf_counter()`` value after which no release-work search runs on (the
         one under way is abandoned): σ* is the best of the separations evaluated and the
-        level says ``stopped``; the path check is skipped. The hold at σ* is still
-        computed (four loadings of one axis).
+        level says ``stopped``; the path check is skipped. The hold at σ* keeps to it
+        too: loadings not finished by then are ``limited_by: "budget"`` (``None`` in the
+        report) and the hold says ``stopped``.
 
     Returns
     -------
@@ -328,7 +330,7 @@ def frictional_level(res: PadGraspResult, mu: float, *, rtol: float | None = Non
                                       "axis has no quasi-static solution")
         else:
             try:
-                out = dataclasses.replace(out, hold=fc.hold(sigma_star))
+                out = dataclasses.replace(out, hold=fc.hold(sigma_star, deadline=deadline))
             except GraspError as err:
                 out = dataclasses.replace(out, hold_error=str(err))
     return dataclasses.replace(out, seconds=time.perf_counter() - t_begin)
@@ -371,28 +373,64 @@ def _path_check(land: Landscape, path: list, sigma: float, mu: float, forces_of,
     return {"work": max(works), "dissipation": d, "works": works}
 
 
+#: What ends a holding-load entry (``hold["limited_by"]``) and what that means; a value
+#: is reported only for ``"friction"``, ``"dynamic"`` and ``"unbalanced"``.
+HOLD_LIMITS = {
+    "friction": "gross slip as the last contact starts to slide (the value equals 'slide')",
+    "dynamic": "the quasi-static stick/slip path ends (no consistent rate): the part lets "
+               "go dynamically beyond the value",
+    "geometry": "wedged or jammed: the part carries load after every contact slides (the "
+                "pads' curvature, or a block's corners, resist in the small-displacement "
+                "kinematics; leaving that is large motion, measured by the release work "
+                "U_A); value null, 'slide' gives the load at which the friction is "
+                "exhausted, 'geometric_limit' the small-displacement limit (null: none)",
+    "unbalanced": "not held at zero external load: the squeeze's contact forces leave a "
+                  "resultant ('gauge_reaction') that friction cannot carry once released",
+    "budget": "not computed: the time budget (--max-seconds) was spent first",
+}
+
+
+def _num(x: float) -> float | None:
+    """A finite float for JSON (``-0.0`` as ``0.0``), ``None`` for ``±inf``/``nan``."""
+    return float(x) + 0.0 if math.isfinite(x) else None
+
+
 def hold_to_dict(hold: dict | None, reason: str | None = None) -> dict[str, Any] | None:
-    """The report's ``hold`` (JSON has no infinity): ``force`` [N] and ``torque`` [N·m]
-    pairs ``[−, +]`` with ``None`` where the linear kinematics never lets go, a ``reason``
-    saying so, and ``slide`` (the loads at which every contact slides: the friction
-    exhausted, finite wherever friction is what holds)."""
+    """The report's ``hold`` (valid JSON: no infinity, no ``-0.0``): ``force`` [N] and
+    ``torque`` [N·m] pairs ``[−, +]`` from zero external load (``f− ≤ 0 ≤ f+``: the load
+    that dislodges the part each way, :meth:`FrictionalCurve.hold`), each ``None`` unless
+    friction (or the end of the quasi-static path) limits it, ``limited_by`` naming what
+    does per entry (:data:`HOLD_LIMITS`), ``slide`` (the loads at which every contact
+    slides: the friction exhausted, finite wherever friction is what holds),
+    ``geometric_limit`` (the small-displacement limit of the geometric entries),
+    ``gauge_reaction`` and a ``reason`` for every ``None``."""
     if hold is None:
         return None if reason is None else {"force": None, "torque": None, "slide": None,
-                                            "reason": reason}
+                                            "limited_by": None, "reason": reason}
+    kinds = hold["limited_by"]
 
-    def pair(v):
-        return [None if not math.isfinite(x) else float(x) for x in v]
+    def value(key: str) -> list:
+        return [_num(x) if k in ("friction", "dynamic", "unbalanced") else None
+                for x, k in zip(hold[key], kinds[key])]
 
-    unbounded = [k for k in ("force", "torque") if not all(map(math.isfinite, hold[k]))]
-    why = None
-    if unbounded:
-        why = (f"{' and '.join(unbounded)}: no gross slip in the small-displacement "
-               "kinematics (the part jams or is wedged on the pads' curvature; leaving that "
-               "is large motion, measured by the release work U_A); 'slide' gives the load "
-               "at which the friction is exhausted")
-    return {"force": pair(hold["force"]), "torque": pair(hold["torque"]),
+    def geometric(key: str) -> list:
+        return [_num(x) if k == "geometry" else None for x, k in zip(hold[key], kinds[key])]
+
+    used = sorted({k for v in kinds.values() for k in v},
+                  key=list(HOLD_LIMITS).index)
+    why = "; ".join(f"{k}: {HOLD_LIMITS[k]}" for k in used if k != "friction") or None
+    if hold.get("stopped"):
+        why = hold["stopped"] + ("" if why is None else "; " + why)
+    pair = lambda v: [_num(x) for x in v]  # noqa: E731
+    return {"force": value("force"), "torque": value("torque"),
+            "limited_by": {"force": list(kinds["force"]), "torque": list(kinds["torque"])},
             "slide": {"force": pair(hold["slide"]["force"]),
                       "torque": pair(hold["slide"]["torque"])},
+            "geometric_limit": {"force": geometric("force"), "torque": geometric("torque")},
+            "gauge_reaction": {k: _num(v) for k, v in hold["gauge_reaction"].items()},
+            "convention": "external load (force across the axis, torque about the area "
+                          "centroid) from zero, applied one way at a time: [-, +] with "
+                          "- <= 0 <= +",
             "reason": why, "units": {"force": "N", "torque": "N*m"}}
 
 
@@ -492,7 +530,7 @@ def frictional_refined(run: RefinedPadGrasp, mu: float, *, hold: bool = True,
         stopped += f"; {len(run.levels) - len(levels)} finer level(s) not read with friction"
         if hold:        # the hold belongs to the finest level read
             fin = levels[-1]
-            levels[-1] = _with_hold(fin, mu)
+            levels[-1] = _with_hold(fin, mu, deadline)
     k = len(levels)
     refined = FrictionalRefinement(
         [lv.result for lv in levels], run.max_areas[:k], run.rtol, run.adaptive,
@@ -504,15 +542,19 @@ def frictional_refined(run: RefinedPadGrasp, mu: float, *, hold: bool = True,
                             "levels_read": k, "levels": len(run.levels)})
 
 
-def _with_hold(lv: FrictionalLevel, mu: float) -> FrictionalLevel:
-    """``lv`` with the hold at its σ* (the finest level read when the budget ran out)."""
+def _with_hold(lv: FrictionalLevel, mu: float, deadline: float | None = None) -> FrictionalLevel:
+    """``lv`` with the hold at its σ* (the finest level read when the budget ran out;
+    skipped, with the reason, when ``deadline`` has passed)."""
     res = lv.result
     if res.sigma_star is None:
         return lv
+    if deadline is not None and time.perf_counter() > deadline:
+        return dataclasses.replace(lv, hold_error="skipped: the time budget (--max-seconds) "
+                                   "was spent before the holding loads")
     try:
         curve = res.solver.curve(res.start_curve.axis, res.start_curve.pad, res.sigma_L,
                                  _hole_of(res.solver, res.start_curve))
         return dataclasses.replace(lv, hold=frictional_grasp(res.solver, curve, mu)
-                                   .hold(res.sigma_star))
+                                   .hold(res.sigma_star, deadline=deadline))
     except GraspError as err:
         return dataclasses.replace(lv, hold_error=str(err))

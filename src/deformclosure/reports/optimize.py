@@ -149,22 +149,37 @@ def friction_lines(data: dict) -> list[str]:
     lines = []
     hold = data.get("hold")
     if hold is not None and hold.get("force") is not None:
-        def pair(v, unit: str) -> str:      # None: no limit that way (JSON has no inf)
-            lo, hi = ("-inf" if v[0] is None else f"{v[0]:+.4g}",
-                      "+inf" if v[1] is None else f"{v[1]:+.4g}")
-            return f"{lo} .. {hi} {unit}"
+        def num(x: float) -> str:
+            return f"{x + 0.0:+.4g}"          # no "-0"
 
         def show(key: str, unit: str) -> str:
-            v, sl = hold[key], hold["slide"][key]
-            if None in v and None not in sl:   # unbounded in the linear kinematics
-                return f"{pair(sl, unit)} until friction is exhausted (beyond: wedged, no gross slip)"
-            return pair(v, unit) + (" (no gross slip: jammed or seated)" if None in v else "")
+            """``f− .. f+`` per direction: the value, or for a geometric entry the
+            friction-exhausted ``slide`` load, marked."""
+            kinds, parts, notes = hold["limited_by"][key], [], set()
+            for j, k in enumerate(kinds):
+                v, sl = hold[key][j], hold["slide"][key][j]
+                if k == "geometry":
+                    parts.append(("-inf" if j == 0 else "+inf") if sl is None else num(sl))
+                    notes.add("until friction is exhausted; beyond: wedged, no gross slip"
+                              if sl is not None else "no gross slip: jammed or seated")
+                elif v is None:
+                    parts.append("?")
+                    notes.add(f"{k}: not computed")
+                else:
+                    parts.append(num(v))
+                    if k == "unbalanced":
+                        notes.add("not held at zero load: unbalanced")
+            return f"{parts[0]} .. {parts[1]} {unit}" + "".join(f" ({n})" for n in sorted(notes))
 
-        f = hold["force"] if None not in hold["force"] else hold["slide"]["force"]
+        f = [v if k != "geometry" else sl for v, sl, k in
+             zip(hold["force"], hold["slide"]["force"], hold["limited_by"]["force"])]
         carries = ("" if None in f else
-                   f", i.e. {min(abs(f[0]), abs(f[1])) / G0 * 1e3:.4g} g against gravity")
+                   f", i.e. {min(abs(f[0]), abs(f[1])) / G0 * 1e3 + 0.0:.4g} g against gravity")
         lines.append(f"hold at sigma* (mu = {data['friction']:g}): across the axis "
                      f"{show('force', 'N')}{carries}; torque {show('torque', 'N*m')}")
+        if any(k == "budget" for v in hold["limited_by"].values() for k in v):
+            lines.append("hold at sigma*: TRUNCATED, the time budget (--max-seconds) was "
+                         "spent first")
     elif hold is not None:
         lines.append(f"hold at sigma*: not computed ({hold['reason']})")
     stage = data.get("friction_stage") or {}
