@@ -360,6 +360,16 @@ def _choose_modes(prob, st: FrictionState, cands):
     Returns ``(mode, rates)``; ``rates`` is ``None`` when the mode system is singular
     (no finite rate: gross slip) and ``mode`` is ``None`` when no consistent modes exist
     (or, beyond the enumeration limit, none was found).
+
+    Notes
+    -----
+    The pivoting control is that of :func:`deformclosure.contact.lcp.bpp_kernel` (Júdice
+    and Pires' block pivots while the number of violations falls, a backup count, then
+    Murty's single pivot). It is not shared with it on purpose: that kernel is compiled
+    for the placement energy's inner loop and solves a symmetric positive-definite LCP in
+    ``λ`` alone, where block pivoting provably terminates; here each row has four modes
+    (open, stick, slip ±), the rate system is non-symmetric (friction couples ``τ̇`` to
+    ``λ̇``), pivoting can cycle, so the enumeration behind it is part of the method.
     """
     mu = prob.mu
     touching, releasing, on_cone, cone_dir = cands
