@@ -194,7 +194,9 @@ def test_the_indicator_vanishes_on_a_uniform_strain_and_peaks_at_a_notch_root():
     assert np.all(np.abs(c[:, 0] - 0.010) < 3e-3)             # under the pads, at the notches
 
 
-@given(st.lists(st.floats(0.0, 1e3), min_size=1, max_size=40), st.floats(0.05, 1.0))
+# subnormal indicators excluded: θ·Σ of a lone 5e-324 underflows to 0 (found by hypothesis)
+@given(st.lists(st.floats(0.0, 1e3, allow_subnormal=False), min_size=1, max_size=40),
+       st.floats(0.05, 1.0))
 def test_bulk_marking_is_the_smallest_set_with_the_share(eta2, theta):
     eta2 = np.array(eta2)
     marked = bulk_marking(eta2, theta)

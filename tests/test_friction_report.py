@@ -164,20 +164,23 @@ def test_release_work_is_at_least_the_frictionless_release_energy(name):
 
 # --------------------------------------------------------------------------- verdicts
 def test_a_convex_block_between_flat_pads_is_held_with_friction_only():
-    """SPEC §6: not held without friction (a lateral shift keeps the chord); SPEC §9: held
-    with μ = 0.5, and the report carries the friction keys."""
+    """SPEC §6: not held without friction (a lateral shift keeps the chord); SPEC §9: a
+    barrier with μ = 0.5 far above the noise floor, and the report carries the friction
+    keys. One coarse mesh (contact elements larger than ℓ/2) decides nothing: "undecided"
+    (the README block held with friction to ``--rtol``: the slow test below)."""
     params = {"axis": "6,10,90", "pad_radius": 0.5, "pad_width": 36, "refine": 1,
               "grid_angles": 8, "grid_offsets": 25}
     plain = reports.run("optimize", "examples/rectangle.json", params)
     rough = reports.run("optimize", "examples/rectangle.json", {**params, "friction": 0.5})
     assert plain.data["verdict"] == "not held"
     d = rough.data
-    assert d["verdict"] == "held" and d["friction"] == 0.5
-    assert d["quality"] > 0 and d["dissipation"] > 0 and len(d["escape_path"]) > 2
+    assert d["verdict"] == "undecided" and d["friction"] == 0.5
+    assert d["quality"] > 100 * d["noise_floor"]
+    assert d["dissipation"] > 0 and len(d["escape_path"]) > 2
     assert d["frictionless"]["verdict"] == "not held"
     assert None not in d["hold"]["force"] and d["hold"]["force"][1] > 0
     assert any(ln.startswith("hold at sigma*") for ln in rough.lines)
-    assert rough.lines[-1] == "verdict: HELD"
+    assert rough.lines[-1] == "verdict: UNDECIDED"
     json.dumps(d, allow_nan=False)                     # JSON without infinities
 
 

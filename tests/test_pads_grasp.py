@@ -58,8 +58,20 @@ def test_ellipse_across_its_short_axis_is_not_held():
 
 
 def test_pads_seated_in_notches_hold_with_a_resolved_barrier():
-    r = _solve(_part(NOTCHED, 0.2), [15, 0], [15, 12], Pad(0.0, 2 * MM))
-    assert r.verdict == "held"
+    """Pads seated in notches hold (SPEC §6), on one mesh that resolves the contacts
+    (``h ≤ ℓ/2`` there: the first level's sizing, :func:`first_sizing`); the same grasp on
+    the uniform 0.2 mm² mesh, whose contact elements are larger, decides nothing."""
+    from deformclosure.pads.adapt import first_sizing
+
+    part = _part(NOTCHED, 0.2)
+    axis = GraspAxis.through(np.array([15, 0]) * MM, np.array([15, 12]) * MM)
+    pad = Pad(0.0, 2 * MM)
+    coarse = _solve(part, [15, 0], [15, 12], pad)
+    assert coarse.quality > 0 and coarse.unresolved and coarse.verdict == "undecided"
+    sizing = first_sizing(part, axis, pad, 0.2e-6)
+    mesh = dc.mesh_part(part, max_area=sizing.default, sizing=sizing)
+    r = optimize_pads(mesh, axis, pad, twin=PadContact(twin_mesh(part)))
+    assert r.resolves and r.verdict == "held"
     assert r.U_A > 100 * r.noise, (r.U_A, r.noise)
     # The escape climbs out of the notch: the pads end up off it, not squeezed deeper.
     assert len(r.escape_path) >= 2

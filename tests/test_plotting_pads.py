@@ -34,22 +34,24 @@ MM = 1e-3
 
 @pytest.fixture(scope="module")
 def notched():
-    """The notched bar on 300 nodes, round 2 mm pads seated in its notches (about 1 s): a
-    held grasp with a finite barrier, so an escape path."""
+    """The notched bar on 300 nodes, round 2 mm pads seated in its notches (about 4 s): a
+    grasp with a finite barrier, so an escape path (one mesh: its verdict "undecided"), and
+    a plan whose best candidate is verified to ``rtol = 0.2`` on refined meshes ("held")."""
     part = dc.notched_part()
     part = replace(part, mesh_options=replace(part.mesh_options, max_area=1e-6))
     mesh = dc.mesh_part(part)
     res = optimize_pads(mesh, GraspAxis(np.pi / 2, -0.015), Pad(0.0, 2e-3), n_angles=8,
                         n_offsets=8, noise=False)
-    assert res.verdict == "held" and res.escape_path and np.isfinite(res.U_A)
-    plan = plan_pads(mesh, Pad(0.0, 2e-3), n_angles=6, n_offsets=16, n_sigma=16, top=1)
+    assert res.quality > 0 and res.escape_path and np.isfinite(res.U_A)
+    plan = plan_pads(mesh, Pad(0.0, 2e-3), n_angles=6, n_offsets=16, n_sigma=16, top=1,
+                     part=part, rtol=0.2)
     return {"part": part, "mesh": mesh, "res": res, "plan": plan}
 
 
 @pytest.fixture(scope="module")
 def rhombus():
-    """Round pads opening into the acute corners of a rhombus hole (expanding, held; about
-    0.5 s)."""
+    """Round pads opening into the acute corners of a rhombus hole (expanding, a barrier;
+    about 0.5 s)."""
     from deformclosure.pads.contact import hole_containing
 
     part = dc.Part.from_dict({
@@ -61,7 +63,7 @@ def rhombus():
     res = optimize_pads(mesh, GraspAxis.through(np.array([8, 10]) * MM, np.array([22, 10]) * MM),
                         Pad(0.0, MM), hole=hole_containing(mesh, [0.015, 0.010]), n_angles=12,
                         n_offsets=12, noise=False)
-    assert res.start_curve.expanding and res.verdict == "held" and res.escape_path
+    assert res.start_curve.expanding and res.quality > 0 and res.escape_path
     return {"part": part, "mesh": mesh, "res": res}
 
 

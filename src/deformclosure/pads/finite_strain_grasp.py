@@ -207,10 +207,11 @@ class FiniteStrainResult:
     @property
     def verdict(self) -> str:
         """``"held"`` iff the finite-strain quality is positive on a mesh that resolves the
-        pads (the refinement's verdict rules apply on top, :mod:`.refine`)."""
+        answer (:attr:`PadGraspResult.resolves`; the refinement's verdict rules apply on
+        top, :mod:`.refine`)."""
         if self.quality <= 0:
             return "not held"
-        return "undecided" if self.linear.blind else "held"
+        return "held" if self.linear.resolves else "undecided"
 
     def to_dict(self) -> dict[str, Any]:
         """The pads report (SPEC §6) with the finite-strain values in place of the linear

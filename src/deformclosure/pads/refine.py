@@ -26,7 +26,9 @@ report then says ``converged: false``.
 mesh that resolves the pads, :func:`~deformclosure.pads.optimize.mesh_is_blind`);
 ``"not held"`` when U_A plus its error is within the noise floor (no barrier, or none
 beyond the error); otherwise ``"undecided"``. A single mesh has no estimate: its verdict
-is the mesh's own.
+is the mesh's own, ``"held"`` only where that mesh resolves the answer (the pads meet
+several nodes and the contact elements are at most ℓ/2,
+:attr:`~deformclosure.pads.optimize.PadGraspResult.resolves`), else ``"undecided"``.
 """
 
 from __future__ import annotations
@@ -319,7 +321,10 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int | None 
     ...                 mesh=mesh_part(part, max_area=1e-6), twin=False,
     ...                 n_angles=8, n_offsets=8, noise=False)
     >>> res.verdict, round(res.finest.sigma0 * 1e3, 3)              # mm
-    ('held', 7.657)
+    ('undecided', 7.657)
+
+    (one mesh has no error estimate, and this one does not resolve the contacts: its own
+    verdict, ``"undecided"``; without ``mesh`` it refines to ``rtol`` and decides.)
     """
     _check_request(part, axis, pad, refine, rtol, max_seconds, options)
     if rtol is not None and part is not None:

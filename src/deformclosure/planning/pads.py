@@ -137,7 +137,8 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
         with the error estimate and the verdict of
         :class:`~deformclosure.pads.refine.RefinedPadGrasp`); without it, on ``mesh``
         alone (no error estimate: the verdict is "held" only for a barrier above the
-        noise floor on that mesh, and never on a blind mesh).
+        noise floor on a mesh that resolves the answer,
+        :attr:`~deformclosure.pads.optimize.PadGraspResult.resolves`).
     rtol : float, optional
         Relative accuracy of each verified candidate (default 0.05).
     max_seconds : float, optional
@@ -173,7 +174,10 @@ def plan_pads(mesh, pad: Pad, *, n_angles: int = 36, n_offsets: int = 40, n_sigm
     >>> plan = plan_pads(mesh, Pad(0.0, 2e-3), n_angles=6, n_offsets=16, n_sigma=16, top=1)
     >>> best = plan.rows[0]
     >>> [round(v * 1e3, 3) for v in best["point"]], best["verdict"], best["verified"]
-    ([15.0, 6.0], 'held', True)
+    ([15.0, 6.0], 'undecided', True)
+
+    (verified on ``mesh`` alone, which does not resolve the contacts: ``"undecided"``;
+    with ``part=`` each candidate is refined to ``rtol`` and decided.)
     """
     e_L = elastic_limit_strain_of(mesh)
     check_counts(n_angles=n_angles, n_offsets=n_offsets, n_sigma=n_sigma, top=(top, 0),
