@@ -120,7 +120,10 @@ def test_asymmetric_part_best_axis_is_not_on_a_symmetry_line():
     plan = plan_pads(mesh, Pad(0, 1.5 * MM), n_angles=36, n_offsets=40, top=3,
                      twin=PadContact(twin_mesh(part)))
     best = plan.rows[0]
-    assert best["verdict"] == "held" and best["verified"] and best["method"] == "exact"
+    # verified on this one mesh (no part given: no refinement): a barrier, "undecided"
+    # unless the mesh resolves the contacts
+    assert best["verdict"] in ("held", "undecided") and best["quality"] > 0
+    assert best["verified"] and best["method"] == "exact"
     ang = math.degrees(best["angle"]) % 180
     assert 50 < ang < 70, ang
     ca, cb = np.array(best["contacts"]) / MM
@@ -206,9 +209,14 @@ def _expand(part, p, q, pad):
 def test_pads_opening_into_the_corners_of_a_rhombus_hole_hold():
     """Opened along the long diagonal, round pads sit in the acute corners: a sideways
     shift or a turn shortens the chord, so the pads must squeeze harder to leave."""
-    r = _expand(_plate([[8, 10], [15, 13], [22, 10], [15, 7]]), [8, 10], [22, 10], Pad(0, 1 * MM))
+    part, pad = _plate([[8, 10], [15, 13], [22, 10], [15, 7]]), Pad(0, 1 * MM)
+    r = _expand(part, [8, 10], [22, 10], pad)
     assert r.start_curve.expanding and r.sigma_star > r.sigma0 and r.sigma_L > r.sigma_star
-    assert r.verdict == "held" and r.U_A > 50 * r.noise
+    assert r.verdict in ("held", "undecided") and r.U_A > 50 * r.noise     # one mesh
+    # the verdict itself from the refinement to an accuracy (SPEC §6)
+    refined = pad_grasp(part, GraspAxis.through(np.array([8, 10]) * MM, np.array([22, 10]) * MM),
+                        pad, expanding_from=np.array([15, 10]) * MM, rtol=0.2)
+    assert refined.verdict == "held", refined.convergence()
 
 
 ROUND_HOLE = (np.array(_ellipse(4, 4, 64)) + [15, 10]).round(6).tolist()

@@ -244,7 +244,9 @@ def test_check_agrees_with_optimize_for_two_pads(name):
     mesh = mesh_part(part)
     axis = GraspAxis.through(np.asarray(p) * MM, np.asarray(q) * MM)
     pads = optimize_pads(mesh, axis, Pad(0.0, rho * MM), twin=PadContact(twin_mesh(part)))
-    assert (pads.verdict == "held") == held
+    # one mesh: "undecided" where it does not resolve the contacts, never "held" for a
+    # part that is not held
+    assert (pads.verdict != "not held") == held
     if held:
         sigma, U_pads = pads.sigma_star, pads.U_A
     else:                     # no σ* when nothing holds: the middle of the squeeze range
