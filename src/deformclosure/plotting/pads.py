@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..pads.geometry import pad_depth, pad_pair
 from ..units import length_scale
 from .grasp import quality_lines, sigma_marks
-from .mesh import (figure_axes, legend_below, legend_outside, figure_path, save_figure,
-                   side_colorbar)
+from .mesh import figure_axes, legend_below, legend_outside, save_figures, side_colorbar
 
 __all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots",
            "PadState", "pad_state", "curve_state", "draw_state", "plot_force_squeeze",
@@ -71,22 +71,6 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
     return ax.figure
 
 
-def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarray:
-    """Outline (in plot units) of a pad whose face is at axial position ``z``."""
-    a, n = axis.direction, axis.normal
-    h, r = 0.5 * pad.width, pad.radius
-    t = np.linspace(0, np.pi / 2, 24)
-    # Face side of the capsule in (x, s) with s measured from the face towards the part.
-    right = np.column_stack([h + r * np.sin(t), r - r * np.cos(t)])
-    prof = np.vstack([right[::-1] * [-1, 1], right])
-    back = np.array([[h + r, r + depth], [-h - r, r + depth]])
-    pts = np.vstack([prof, back])
-    x, sd = pts[:, 0], pts[:, 1]
-    o = np.asarray(axis.origin) + axis.offset * n
-    P = o[None] + x[:, None] * n[None] + (z - side * sd)[:, None] * a[None]
-    return P * s
-
-
 def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
     """Draw both pads of ``result`` at separation ``sigma`` (m; default first touch) where
     the contact path puts them relative to the part in its solver's gauge (pad A's face at
@@ -95,7 +79,7 @@ def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
     curve = result.start_curve
     sigma = result.sigma0 if sigma is None else sigma
     delta, t = _path_motion(curve, sigma)
-    for P in _outlines_at(curve, result.pad, delta, t, _pad_depth(result)):
+    for P in _pads_at(curve, result.pad, delta, t, _pad_depth(result)):
         ax.fill(P[:, 0] * s, P[:, 1] * s, color=kw.get("color", "0.35"),
                 alpha=kw.get("alpha", 0.8), lw=0)
     return ax
@@ -189,27 +173,22 @@ def pad_state(result, sigma: float | None = None) -> PadState:
                        result.limit.critical_distance)
 
 
-def _pad_outlines(curve, pad, state: PadState, scale: float, depth: float) -> list[np.ndarray]:
-    """Outlines (m) of pads A and B of ``curve`` at ``state``, displacements × ``scale``:
-    A's face at ``z_a − t``, B's at ``z_b − δ − t`` (the contact path's frame)."""
-    return _outlines_at(curve, pad, scale * state.delta, scale * state.translation, depth)
-
-
-def _outlines_at(curve, pad, delta: float, t: float, depth: float) -> list[np.ndarray]:
-    """Outlines (m) of the pads of ``curve`` at squeeze ``delta`` and part translation
-    ``t`` (m): A's face at ``z_a − t``, B's at ``z_b − δ − t``."""
+def _pads_at(curve, pad, delta: float, t: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Outlines (m, :func:`~deformclosure.pads.geometry.pad_pair`) of the pads of
+    ``curve`` at squeeze ``delta`` and part translation ``t`` (m), the contact path's
+    frame: A's face at ``z_a − t``, B's at ``z_b − δ − t``."""
     touch = curve.touch
-    if touch.expanding:                         # back to back inside the hole
-        depth = min(depth, 0.45 * max(abs(touch.z_a - touch.z_b) + delta, 1e-12))
-    return [_capsule(pad, curve.axis, touch.z_a - t, 1, 1.0, depth),
-            _capsule(pad, curve.axis, touch.z_b - delta - t, -1, 1.0, depth)]
+    return pad_pair(pad, curve.axis, touch, touch.z_a - t, touch.z_b - delta - t, depth)
 
 
 def _pad_depth(result) -> float:
-    """How far (m) the drawn pads reach behind their faces: a stub, at most 5 % of the
-    part's size, so that the frame holding them stays on the part."""
-    return min(0.15 * max(result.sigma0, result.pad.half_span),
-               0.05 * result.solver.mesh.diameter)
+    """How far (m) the drawn pads reach behind their faces: the geometry's stub
+    (:func:`~deformclosure.pads.geometry.pad_depth`), at most 5 % of the part's size, so
+    that the frame holding them stays on the part."""
+    touch = result.start_curve.touch
+    if touch is None:
+        return 0.0
+    return min(pad_depth(result.pad, touch), 0.05 * result.solver.mesh.diameter)
 
 
 def _frame(ax, pts: np.ndarray, margin: float = 0.04) -> None:
@@ -250,10 +229,11 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
                     ls="--", zorder=2, label="part at rest" if i == 0 else None)
         ax.plot(xy[ring, 0], xy[ring, 1], color="k", lw=1.0, zorder=3)
     if depth is None:
-        depth = 0.15 * max(curve.sigma0, pad.half_span)
+        depth = pad_depth(pad, curve.touch) if curve.touch is not None else 0.0
     pts = [xy]
     if curve.touch is not None:
-        for k, P in enumerate(_pad_outlines(curve, pad, state, scale, depth)):
+        for k, P in enumerate(_pads_at(curve, pad, scale * state.delta,
+                                       scale * state.translation, depth)):
             ax.fill(P[:, 0] * s, P[:, 1] * s, color="0.35", alpha=0.75, lw=0, zorder=4,
                     label="pads" if k == 0 else None)
             pts.append(P * s)
@@ -787,12 +767,7 @@ def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: f
     if convergence is not None and len(convergence) > 1:
         fig, ax = new_figure((7, 4.5))
         figs.append(("convergence", plot_convergence(convergence, ax=ax, units=units)))
-    paths = []
-    for name, f in figs:
-        path = figure_path(target, name)
-        save_figure(f, path)
-        paths.append(path)
-    return paths
+    return save_figures(figs, target)
 
 
 def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
@@ -820,9 +795,4 @@ def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-    paths = []
-    for name, f in figs:
-        path = figure_path(target, name)
-        save_figure(f, path)
-        paths.append(path)
-    return paths
+    return save_figures(figs, target)
