@@ -314,18 +314,7 @@ def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Outlines (m) of pads A and B at squeeze ``delta`` (m), where they touch the part
     displaced by ``u``: each moved in by half the squeeze from its first-touch face
-    position, both by :func:`face_shift`.
-
-    Parameters
-    ----------
-    pad, axis, touch
-        The gripper and its first touch (rest geometry).
-    delta : float
-        Squeeze (m), ≥ 0.
-    nodes : ndarray, shape (n, 2)
-        Rest positions (m).
-    u, forces : ndarray, shape (n, 2) or (2n,)
-        Node displacements (m) and contact forces on the nodes (N).
+    position, both by :func:`face_shift` (whose parameters these are).
 
     Returns
     -------
