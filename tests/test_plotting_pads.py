@@ -324,6 +324,111 @@ def test_plan_top_axes_draws_no_pads(notched):
     assert len(fills) == 1 + len(notched["mesh"].hole_loops)        # the part's outline only
 
 
+# ----------------------------------------------------------------------------- finite strain
+
+
+@pytest.fixture(scope="module")
+def neo():
+    """The notched bar on 89 nodes, round 2 mm pads, its grasp re-solved neo-Hookean
+    (SPEC §8; three σ samples, about 3 s)."""
+    from deformclosure.pads.finite_strain_grasp import optimize_finite_strain
+
+    part = dc.notched_part()
+    part = replace(part, mesh_options=replace(part.mesh_options, max_area=4e-6))
+    mesh = dc.mesh_part(part)
+    lin = optimize_pads(mesh, GraspAxis(np.pi / 2, -0.015), Pad(0.0, 2e-3), n_angles=6,
+                        n_offsets=6, noise=False)
+    fs = optimize_finite_strain(mesh, lin, n_samples=3, rtol=0.2)
+    assert fs.sigma_star is not None and lin.sigma_star is not None and lin.escape_path
+    # the two models' σ* differ enough for the pictures' titles to tell them apart
+    assert f"{fs.sigma_star / MM:.4g}" != f"{lin.sigma_star / MM:.4g}"
+    return {"mesh": mesh, "fs": fs, "lin": lin}
+
+
+def _stretch_magnitudes_by_hand(mesh, u: np.ndarray) -> np.ndarray:
+    """``max |λᵢ − 1|`` per element of ``C = FᵀF``, ``F = I + ∇u`` from the triangle's
+    own edge vectors, the eigenvalues by numpy (not the library's strain routines)."""
+    u = np.asarray(u, float).reshape(-1, 2)
+    out = []
+    for tri in mesh.triangles:
+        X = mesh.nodes[tri]
+        x = X + u[tri]
+        D = np.column_stack([X[1] - X[0], X[2] - X[0]])
+        d = np.column_stack([x[1] - x[0], x[2] - x[0]])
+        F = d @ np.linalg.inv(D)
+        lam = np.sqrt(np.linalg.eigvalsh(F.T @ F))
+        out.append(np.abs(lam - 1.0).max())
+    return np.array(out)
+
+
+@pytest.mark.slow            # about 4 s: the neo-Hookean re-solve
+def test_neo_hookean_pictures_draw_the_finite_strain_state(neo):
+    """``optimize --elasticity neo-hookean --plot``: the grasp picture is the neo-Hookean
+    part at its own σ* (title names the model, σ*, F; outline = rest + finite-strain
+    displacement; colours = SPEC §8's stretch measure, whose maximum is the report's
+    strain at σ*; pads on the deformed part where the exact contact puts them); curves
+    and force are the finite-strain ones; the escape strip says it is the linear twin."""
+    fs, lin, mesh = neo["fs"], neo["lin"], neo["mesh"]
+    c = fs.start_curve
+    ax = pp.plot_pad_grasp(fs).axes[0]
+    title = ax.get_title()
+    assert title.startswith("neo-Hookean: ")
+    assert f"σ* = {fs.sigma_star / MM:.4g} mm" in title and f"F = {fs.force:.4g} N" in title
+    assert f"{lin.sigma_star / MM:.4g} mm" not in title
+    # the rest at a separation of the run's curve halfway to σ_L (this σ* is at touch:
+    # the seated pads' barrier is largest there), where the two models' states differ
+    sig = min((v for v in fs.curve["sigma"] if v is not None),
+              key=lambda v: abs(v - 0.5 * (fs.sigma0 + fs.sigma_L)))
+    ax = pp.plot_pad_grasp(fs, sigma=sig).axes[0]
+    assert ax.get_title().startswith("neo-Hookean: ") and f"σ = {sig / MM:.4g} mm" in ax.get_title()
+    u = fs.state_at(sig, "s").displacement.reshape(-1, 2)
+    u_lin = lin.state_at(sig, "s").displacement.reshape(-1, 2)
+    assert np.abs(u - u_lin).max() > 0.01 * np.abs(u).max() > 0
+    ring = np.append(mesh.loops[0], mesh.loops[0][0])
+    drawn = [ln.get_xydata() for ln in ax.lines if ln.get_linestyle() == "-"][0]
+    np.testing.assert_allclose(drawn, (mesh.nodes[ring] + u[ring]) / MM, rtol=1e-12)
+    colours = np.asarray(_strain_collection(ax).get_array(), float)
+    assert colours.max() == pytest.approx(c.strain(sig, fs.limit.critical_distance), rel=1e-9)
+    assert pp.pad_state(fs).strain.max() == pytest.approx(fs.strain_at_sigma_star, rel=1e-9)
+    np.testing.assert_allclose(c.strain_field(sig, 0.0),
+                               _stretch_magnitudes_by_hand(mesh, u), rtol=1e-9, atol=1e-12)
+    assert "max|λ−1|" in ax.figure.axes[1].get_ylabel()
+    # the pads: pressed nodes of the deformed part on their outlines (exact contact)
+    pads = [shapely.Polygon(p.get_xy()) for p in ax.patches if isinstance(p, Polygon)]
+    assert len(pads) == 2
+    f = fs.state_at(sig, "s").forces
+    pressed = np.flatnonzero(np.linalg.norm(f, axis=1) > 0)
+    assert len(pressed) >= 2
+    pts = shapely.points((mesh.nodes[pressed] + u[pressed]) / MM)
+    dist = np.min([shapely.distance(p.exterior, pts) for p in pads], axis=0)
+    delta = c.delta(sig)
+    assert np.all(dist <= 0.01 * delta / MM), dist / (delta / MM)
+    # the curves are the finite-strain run's
+    q = pp.plot_pad_quality(fs).axes[0]
+    assert q.get_title().startswith("neo-Hookean: ")
+    fax = pp.plot_force_squeeze(fs).axes[0]
+    assert fax.get_title().startswith("neo-Hookean: ")
+    star = [ln for ln in fax.lines if ln.get_label().startswith("$\\sigma^*$")][0]
+    assert star.get_xdata()[0] == pytest.approx(fs.sigma_star / MM)
+    assert star.get_ydata()[0] == pytest.approx(fs.force)
+    # the escape strip: the linear model's path at the linear σ*, and the title says so
+    strip = pp.plot_escape_strip(fs, n=3)
+    sup = strip._suptitle.get_text()
+    assert sup.startswith("linear twin of the neo-Hookean run")
+    assert f"σ* = {lin.sigma_star / MM:.4g} mm" in sup
+
+
+@pytest.mark.slow            # the neo-Hookean fixture (about 4 s, shared)
+def test_save_pad_plots_of_a_finite_strain_result(neo, tmp_path):
+    """What ``optimize --elasticity neo-hookean --plot dir/fig.svg`` hands the pictures:
+    the four figures written, the grasp one titled with the model."""
+    written = pp.save_pad_plots(neo["fs"], neo["mesh"], tmp_path / "fig.svg")
+    assert [p.name for p in written] == [f"fig_{n}.svg" for n in
+                                         ("grasp", "quality", "force", "escape")]
+    assert all(_has_magic(p, "svg") for p in written)
+    assert "neo-Hookean: " in written[0].read_text()
+
+
 def test_convergence_plot_data():
     rows = [{"nodes": 100, "quality": 0.010, "sigma_star": 0.0050},
             {"nodes": 400, "quality": 0.012, "sigma_star": 0.0052},

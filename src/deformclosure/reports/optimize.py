@@ -298,8 +298,8 @@ def _pads_writer(inp):
         if p["plot"]:
             from ..plotting.pads import save_pad_plots
 
-            # the pads' pictures draw the linear model's state (finite strain: its twin)
-            written += save_pad_plots(getattr(fine, "linear", fine), inp.mesh, p["plot"],
+            # finite strain: its own state and curves; the escape strip is the linear twin's
+            written += save_pad_plots(fine, inp.mesh, p["plot"],
                                       units=inp.unit if inp.unit != "m" else "mm",
                                       scale=p.get("scale", 1.0),
                                       convergence=rep.data.get("convergence"))
