@@ -47,6 +47,15 @@ def notched():
 
 
 @pytest.fixture(scope="module")
+def notched_grasp(notched):
+    """The notched grasp's picture at σ* (mm, true scale) and its state, drawn once for the
+    tests that only read them (closing the figure keeps its artists readable)."""
+    res = notched["res"]
+    fig = pp.plot_pad_grasp(res, units="mm")
+    return {"fig": fig, "ax": fig.axes[0], "state": pp.pad_state(res)}
+
+
+@pytest.fixture(scope="module")
 def rhombus():
     """Round pads opening into the acute corners of a rhombus hole (expanding, held; about
     0.5 s)."""
@@ -90,20 +99,18 @@ def _independent_strains(res) -> np.ndarray:
                                      res.limit.critical_distance)
 
 
-def test_deformed_colours_are_the_averaged_strains(notched):
+def test_deformed_colours_are_the_averaged_strains(notched, notched_grasp):
     res = notched["res"]
-    fig = pp.plot_pad_grasp(res, units="mm")
-    ax = fig.axes[0]
+    ax = notched_grasp["ax"]
     colours = np.asarray(_strain_collection(ax).get_array(), float)
     np.testing.assert_allclose(colours, _independent_strains(res), rtol=1e-9, atol=1e-15)
     # its maximum is the strain the report states at σ* (pad_strain_at: a third route)
     assert colours.max() == pytest.approx(res.strain_at_sigma_star, rel=1e-9)
 
 
-def test_deformed_picture_title_labels_colour_bar(notched):
+def test_deformed_picture_title_labels_colour_bar(notched, notched_grasp):
     res = notched["res"]
-    fig = pp.plot_pad_grasp(res, units="mm")
-    ax, cax = fig.axes
+    ax, cax = notched_grasp["fig"].axes
     title = ax.get_title()
     assert f"F = {res.force:.4g} N" in title and f"{res.sigma_star / MM:.4g} mm" in title
     assert "true scale" in title
@@ -116,12 +123,11 @@ def test_deformed_picture_title_labels_colour_bar(notched):
     assert {"part at rest", "pads"} <= {t.get_text() for t in labels}
 
 
-def test_frame_is_tight_on_the_deformed_part(notched):
+def test_frame_is_tight_on_the_deformed_part(notched, notched_grasp):
     """The frame holds the deformed part and stays within the pads' stubs (their radius
     and 5 % of the part's size) and a margin of it: no axis line stretches it."""
     res, mesh = notched["res"], notched["mesh"]
-    ax = pp.plot_pad_grasp(res).axes[0]
-    st = pp.pad_state(res)
+    ax, st = notched_grasp["ax"], notched_grasp["state"]
     xy = (mesh.nodes + st.displacement) / MM
     lo, hi = np.minimum(xy.min(0), mesh.nodes.min(0) / MM), np.maximum(xy.max(0), mesh.nodes.max(0) / MM)
     margin = (res.pad.radius + 0.1 * mesh.diameter) / MM       # the pads' stubs, a margin
@@ -149,21 +155,20 @@ def test_pads_touch_the_deformed_part_where_the_path_presses(case, request):
     assert not any(shapely.contains(p, pts).any() for p in pads)
 
 
-def test_draw_pads_puts_the_pads_where_the_picture_does(notched):
+def test_draw_pads_puts_the_pads_where_the_picture_does(notched, notched_grasp):
     res = notched["res"]
-    drawn = [np.asarray(p.get_xy()) for p in pp.plot_pad_grasp(res).axes[0].patches]
+    drawn = [np.asarray(p.get_xy()) for p in notched_grasp["ax"].patches]
     fig, ax = plt.subplots()
     pp.draw_pads(ax, res, res.sigma_star)
     for a, b in zip(drawn, [np.asarray(p.get_xy()) for p in ax.patches], strict=True):
         np.testing.assert_allclose(a, b)
 
 
-def test_contact_pressure_arrows(notched):
+def test_contact_pressure_arrows(notched, notched_grasp):
     res, mesh = notched["res"], notched["mesh"]
-    ax = pp.plot_pad_grasp(res).axes[0]
+    ax, st = notched_grasp["ax"], notched_grasp["state"]
     quiv = [c for c in ax.collections if isinstance(c, Quiver)]
     assert len(quiv) == 1
-    st = pp.pad_state(res)
     f = np.linalg.norm(st.forces, axis=1)
     assert np.count_nonzero(f) <= pp.MAX_PRESSURE_ARROWS
     assert quiv[0].N == np.count_nonzero(f)              # few pressed nodes: every one
@@ -336,8 +341,8 @@ def neo():
     part = dc.notched_part()
     part = replace(part, mesh_options=replace(part.mesh_options, max_area=4e-6))
     mesh = dc.mesh_part(part)
-    lin = optimize_pads(mesh, GraspAxis(np.pi / 2, -0.015), Pad(0.0, 2e-3), n_angles=6,
-                        n_offsets=6, noise=False)
+    lin = optimize_pads(mesh, GraspAxis(np.pi / 2, -0.015), Pad(0.0, 2e-3), n_angles=4,
+                        n_offsets=4, noise=False)
     fs = optimize_finite_strain(mesh, lin, n_samples=3, rtol=0.2)
     assert fs.sigma_star is not None and lin.sigma_star is not None and lin.escape_path
     # the two models' σ* differ enough for the pictures' titles to tell them apart
@@ -466,16 +471,32 @@ def _has_magic(path: Path, fmt: str) -> bool:
     return any(head.startswith(m) or (fmt == "svg" and m in head) for m in MAGIC[fmt])
 
 
+@pytest.fixture(scope="module")
+def notched_optimize():
+    """``optimize examples/notched_bar.json --at 15,0 15,12 --pad-radius 2 --refine 2
+    --max-area 4 --grid-angles 8 --grid-offsets 8``, its options parsed by the CLI's table
+    and run once (about 3 s): the CLI's ``optimize`` is this run and then
+    :meth:`Report.save` of its ``--plot``, which each format's test calls."""
+    from deformclosure import reports
+
+    params = reports.parse_argv("optimize", ["--at", "15,0", "15,12", "--pad-radius", "2",
+                                             "--refine", "2", "--max-area", "4",
+                                             "--grid-angles", "8", "--grid-offsets", "8",
+                                             "-q"])
+    return reports.run("optimize", ROOT / "examples" / "notched_bar.json", params)
+
+
 @pytest.mark.parametrize("fmt", ["svg", "pdf"])
-def test_plot_file_suffix_sets_every_figures_format(fmt, tmp_path, capsys):
+def test_plot_file_suffix_sets_every_figures_format(fmt, notched_optimize, tmp_path):
     """``optimize --plot out/fig.<fmt>``: every figure as ``out/fig_<name>.<fmt>`` (the
     folder made), in that format; two uniform levels, so a convergence figure too."""
+    from deformclosure.reports.options import options_of
+
     target = tmp_path / "out" / f"fig.{fmt}"
-    rc, out, err = _cli(["optimize", ROOT / "examples" / "notched_bar.json", "--at", "15,0",
-                         "15,12", "--pad-radius", "2", "--refine", "2", "--max-area", "4",
-                         "--grid-angles", "8", "--grid-offsets", "8", "--plot", target, "-q"],
-                        capsys)
-    assert rc == 0, err
+    opt = next(o for o in options_of("optimize") if o.name == "plot")
+    rep = replace(notched_optimize, params={**notched_optimize.params,
+                                            "plot": opt.convert(str(target), "--plot")})
+    rep.save(report=False)
     written = sorted(p.name for p in (tmp_path / "out").iterdir())
     assert {f"fig_{n}.{fmt}" for n in ("grasp", "quality", "force", "convergence")} \
         <= set(written), written
@@ -554,16 +575,16 @@ def test_check_plot_without_escape_path_draws_the_check_and_a_note(tmp_path):
     assert _has_magic(tmp_path / "check.svg", "svg")
 
 
-@pytest.mark.slow           # about 6 s: the verification refines to its time budget
+@pytest.mark.slow           # about 4 s: the verified row refined on two levels
 def test_plan_plot_pdf_and_scale_stays_out_of_the_job_key(tmp_path):
     """``plan --plot dir/plan.pdf``: the map, the axes, the deformed top grasps and (the
-    verified row refined on two levels) the convergence, all PDF; ``--scale`` draws only,
-    so a batch job's key ignores it."""
+    verified row refined on two levels, a loose ``rtol`` met there) the convergence, all
+    PDF; ``--scale`` draws only, so a batch job's key ignores it."""
     from deformclosure import reports
 
     rep = reports.run("plan", ROOT / "examples" / "notched_bar.json",
                       {"pad_radius": 2.0, "grid_angles": 6, "grid_offsets": 16, "verify": 1,
-                       "max_area": 2.0, "rtol": 1e-3, "max_seconds": 6.0, "scale": 2.0,
+                       "max_area": 4.0, "rtol": 0.5, "max_seconds": 6.0, "scale": 2.0,
                        "plot": str(tmp_path / "out" / "plan.pdf")})
     best = rep.data["axes"][0]
     assert best["verified"] and len(best["convergence"]) == best["n_levels"] >= 2
