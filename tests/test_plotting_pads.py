@@ -385,7 +385,8 @@ def test_neo_hookean_pictures_draw_the_finite_strain_state(neo):
     sig = min((v for v in fs.curve["sigma"] if v is not None),
               key=lambda v: abs(v - 0.5 * (fs.sigma0 + fs.sigma_L)))
     ax = pp.plot_pad_grasp(fs, sigma=sig).axes[0]
-    assert ax.get_title().startswith("neo-Hookean: ") and f"σ = {sig / MM:.4g} mm" in ax.get_title()
+    title = ax.get_title()
+    assert title.startswith("neo-Hookean: ") and f"σ = {sig / MM:.4g} mm" in title
     u = fs.state_at(sig, "s").displacement.reshape(-1, 2)
     u_lin = lin.state_at(sig, "s").displacement.reshape(-1, 2)
     assert np.abs(u - u_lin).max() > 0.01 * np.abs(u).max() > 0
@@ -594,3 +595,124 @@ def test_plan_plot_pdf_and_scale_stays_out_of_the_job_key(tmp_path):
     assert all(_has_magic(p, "pdf") for p in written)
     key = reports.key_params("plan", rep.params)
     assert "scale" not in key and "plot" not in key
+
+
+# ----------------------------------------------------------------------------- --animate
+
+
+def _gif_frames(path: Path) -> list[np.ndarray]:
+    """The frames of a GIF as RGB arrays, read back by Pillow."""
+    from PIL import Image
+
+    with Image.open(path) as im:
+        assert im.format == "GIF" and im.is_animated
+        frames = []
+        for k in range(im.n_frames):
+            im.seek(k)
+            frames.append(np.asarray(im.convert("RGB")))
+        assert im.info.get("loop") == 0
+    return frames
+
+
+def _red_pixels(rgb: np.ndarray) -> int:
+    """Pixels of matplotlib's red (C3, tab:red = (214, 39, 40)), within GIF quantisation."""
+    r, g, b = (rgb[..., i].astype(int) for i in range(3))
+    return int(np.count_nonzero((r > 170) & (g < 90) & (b < 90)))
+
+
+def test_animate_writes_one_frame_per_escape_axis(notched, tmp_path):
+    """The pads' escape path as a GIF: one frame per axis of the path (it is shorter than
+    MAX_FRAMES), readable by Pillow, all of one size, 1/FPS s each, looping; the part
+    moves between frames; red (the saddle's title) in the saddle's frame only."""
+    from deformclosure.plotting.animate import FPS, MAX_FRAMES, pad_escape_animation
+
+    res = notched["res"]
+    k = len(res.escape_path)
+    assert 3 <= k <= MAX_FRAMES
+    path = pad_escape_animation(res, tmp_path / "a" / "escape.gif")
+    assert path == tmp_path / "a" / "escape.gif"
+    frames = _gif_frames(path)
+    assert len(frames) == k
+    assert len({f.shape for f in frames}) == 1
+    from PIL import Image
+
+    with Image.open(path) as im:
+        assert im.info["duration"] == pytest.approx(1000 / FPS, abs=1)
+    assert not np.array_equal(frames[0], frames[-1])
+    sad = res.saddle
+    saddle = next(i for i, a in enumerate(res.escape_path)
+                  if np.isclose(a.angle, sad.angle) and np.isclose(a.offset, sad.offset))
+    red = [_red_pixels(f) for f in frames]
+    assert red[saddle] > 0 and all(r == 0 for i, r in enumerate(red) if i != saddle), red
+    # fewer frames asked: the start, the saddle and the end stay
+    few = _gif_frames(pad_escape_animation(res, tmp_path / "few.gif", n=3))
+    assert len(few) == len({0, saddle, k - 1})
+    # no escape path: nothing written
+    assert pp.escape_states(replace(res, escape_path=[])) == []
+    assert pad_escape_animation(replace(res, escape_path=[]), tmp_path / "none.gif") is None
+    assert not (tmp_path / "none.gif").exists()
+
+
+def test_optimize_animate_writes_the_gif_beside_the_pictures(notched_optimize, tmp_path):
+    """``optimize --plot out/fig.pdf --animate``: ``out/fig_escape.gif`` beside the PDFs,
+    one frame per escape axis of the report's path; ``--plot out/`` → ``out/escape.gif``."""
+    params = {**notched_optimize.params, "plot": str(tmp_path / "out" / "fig.pdf"),
+              "animate": True}
+    written = replace(notched_optimize, params=params).save(report=False)
+    gif = tmp_path / "out" / "fig_escape.gif"
+    assert str(gif) in written and written[-1] == str(gif)
+    assert len(_gif_frames(gif)) == len(notched_optimize.data["escape_path"])
+    from deformclosure.outputs import animation_file
+
+    assert animation_file(tmp_path / "folder", "escape") == tmp_path / "folder" / "escape.gif"
+
+
+@pytest.mark.parametrize("command,params,message", [
+    ("optimize", {"at": ("15,0", "15,12"), "animate": True}, "--animate: give --plot too"),
+    ("check", {"fingers": "f.json", "animate": True}, "--animate: give --plot too"),
+    ("optimize", {"at": ("15,0", "15,12"), "animate": True, "plot": "/dev/null"},
+     "--animate: --plot /dev/null is a device or a pipe"),
+    ("optimize", {"model": "paper", "at": ("15,0", "15,12"), "animate": True, "plot": "x/"},
+     "--animate: animates the pads model's escape path"),
+])
+def test_animate_refusals_are_one_line_before_any_work(command, params, message, monkeypatch):
+    """``--animate`` without ``--plot``, with ``--plot`` a device, or on the paper model:
+    one line naming the option, before the part is read (the reader would fail first)."""
+    import importlib
+
+    from deformclosure import reports
+
+    def no_reading(*a, **k):
+        raise AssertionError("the part was read")
+
+    module = importlib.import_module(f"deformclosure.reports.{reports.COMMANDS[command]}")
+    for m in (module, importlib.import_module("deformclosure.reports.inputs")):
+        if hasattr(m, "read_inputs"):
+            monkeypatch.setattr(m, "read_inputs", no_reading)
+    with pytest.raises(DeformClosureError) as err:
+        reports.run(command, ROOT / "examples" / "notched_bar.json", params)
+    assert str(err.value).startswith(message) and "\n" not in str(err.value)
+
+
+@pytest.mark.slow            # the placement-energy kernels (compiled on a cold numba cache)
+def test_check_animate_draws_the_placements_of_the_release(tmp_path):
+    """``check --plot d/check.png --animate`` on the rectangle among its fingers (released
+    through the gap): ``d/check_escape.gif``, one frame per placement of the escape path,
+    the part's filled outline moving; the saddle's frame alone red."""
+    from deformclosure import reports
+
+    rep = reports.run("check", ROOT / "examples" / "rectangle.json",
+                      {"fingers": ROOT / "examples" / "fingers" / "rectangle.json",
+                       "refine": 1, "grid_steps": 12, "saddle_levels": 1,
+                       "plot": str(tmp_path / "d" / "check.png"), "animate": True})
+    written = rep.save(report=False)
+    gif = tmp_path / "d" / "check_escape.gif"
+    assert written[-1] == str(gif)
+    rel = rep.result[1]
+    P = np.asarray(rel.path)
+    assert 2 <= len(P) <= 48
+    frames = _gif_frames(gif)
+    assert len(frames) == len(P)
+    assert not np.array_equal(frames[0], frames[-1])
+    red = [_red_pixels(f) for f in frames]
+    assert red[rel.saddle] > 0 and all(r == 0 for i, r in enumerate(red) if i != rel.saddle)

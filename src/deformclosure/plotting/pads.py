@@ -457,6 +457,26 @@ def _hole_of(mesh, curve) -> int | None:
     return next((k for k, lp in enumerate(mesh.hole_loops) if node in set(lp.tolist())), None)
 
 
+def path_indices(k: int, n: int, saddle: int | None = None) -> list[int]:
+    """Up to ``n`` indices into a path of ``k`` points, evenly spread, always the start,
+    the end and ``saddle`` (so at least those, even when ``n`` is smaller); sorted.
+
+    Examples
+    --------
+    >>> path_indices(10, 4), path_indices(10, 3, saddle=4), path_indices(3, 8)
+    ([0, 3, 6, 9], [0, 4, 9], [0, 1, 2])
+    """
+    if k <= 0:
+        return []
+    idx = set(np.linspace(0, k - 1, max(min(n, k), 1)).round().astype(int).tolist())
+    keep = {0, k - 1} | ({int(saddle)} if saddle is not None else set())
+    idx |= keep
+    while len(idx) > max(n, len(keep)):      # keep the start, the end and the saddle
+        rest = sorted(idx - keep)
+        idx.discard(rest[len(rest) // 2])
+    return sorted(idx)
+
+
 def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
     """Up to ``n`` axes of the escape path at σ* — the start, the saddle, the end and
     evenly between — each solved at σ*: ``(index on the path, curve, state)``. Of a
@@ -466,21 +486,14 @@ def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
     path = result.escape_path
     if not path or result.sigma_star is None:
         return []
-    k = len(path)
-    idx = set(np.linspace(0, k - 1, max(min(n, k), 1)).round().astype(int).tolist())
-    keep = {0, k - 1}
+    saddle = None
     if result.saddle is not None:
-        hit = [i for i, a in enumerate(path) if np.isclose(a.angle, result.saddle.angle)
-               and np.isclose(a.offset, result.saddle.offset)]
-        keep |= set(hit[:1])
-    idx |= keep
-    while len(idx) > max(n, len(keep)):      # keep the start, the end and the saddle
-        rest = sorted(idx - keep)
-        idx.discard(rest[len(rest) // 2])
+        saddle = next((i for i, a in enumerate(path) if np.isclose(a.angle, result.saddle.angle)
+                       and np.isclose(a.offset, result.saddle.offset)), None)
     solver, pad, sig = result.solver, result.pad, result.sigma_star
     hole = _hole_of(solver.mesh, result.start_curve)
     out = []
-    for i in sorted(idx):
+    for i in path_indices(len(path), n, saddle):
         curve = solver.curve(path[i], pad, sig, hole)
         out.append((i, curve, curve_state(solver, curve, sig, result.limit.critical_distance)))
     return out
@@ -539,8 +552,8 @@ def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0)
     cb.set_label("averaged strain (m/m)", fontsize=8)
     twin = "" if model is None else (f"linear twin of the {MODEL_NAMES.get(model, model)} run "
                                      "(linear model's σ*, U, U_A): ")
-    _title_above(fig, axes, f"{twin}escape path at σ* = {result.sigma_star * s:.4g} {units}: U_A = "
-                 f"{_energy_text(result.U_A)} over the start's U = "
+    _title_above(fig, axes, f"{twin}escape path at σ* = {result.sigma_star * s:.4g} {units}: "
+                 f"U_A = {_energy_text(result.U_A)} over the start's U = "
                  f"{states[0][2].energy * 1e3:.4g} mJ")
     return fig
 
