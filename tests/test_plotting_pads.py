@@ -433,6 +433,11 @@ def test_save_pad_plots_of_a_finite_strain_result(neo, tmp_path):
                                          ("grasp", "quality", "force", "escape")]
     assert all(_has_magic(p, "svg") for p in written)
     assert "neo-Hookean: " in written[0].read_text()
+    # --animate: the linear twin's path, one frame per axis, as the strip
+    from deformclosure.plotting.animate import pad_escape_animation
+
+    gif = pad_escape_animation(neo["fs"], tmp_path / "escape.gif")
+    assert len(_gif_frames(gif)) == len(neo["lin"].escape_path)
 
 
 def test_convergence_plot_data():
@@ -662,9 +667,11 @@ def test_optimize_animate_writes_the_gif_beside_the_pictures(notched_optimize, t
     gif = tmp_path / "out" / "fig_escape.gif"
     assert str(gif) in written and written[-1] == str(gif)
     assert len(_gif_frames(gif)) == len(notched_optimize.data["escape_path"])
+    from deformclosure import reports
     from deformclosure.outputs import animation_file
 
     assert animation_file(tmp_path / "folder", "escape") == tmp_path / "folder" / "escape.gif"
+    assert "animate" not in reports.key_params("optimize", params)     # draws only: no new job
 
 
 @pytest.mark.parametrize("command,params,message", [
