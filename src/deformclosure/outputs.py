@@ -35,7 +35,7 @@ from typing import Any, Iterator
 from .errors import DeformClosureError
 
 __all__ = ["atomic_path", "write_text_atomic", "check_outputs", "json_safe", "json_text",
-           "PLOT_FORMATS", "plot_target", "plot_file",
+           "PLOT_FORMATS", "plot_target", "plot_file", "animation_file",
            "write_json", "output_target", "STREAM_OPEN_WAIT"]
 
 #: Longest wait (s) for a process to open a FIFO output for reading.
@@ -387,3 +387,28 @@ def plot_file(value: str | Path, name: str, single: bool = False) -> Path:
     if stem is None:
         return folder / f"{name}.{fmt}"
     return Path(value) if single else folder / f"{stem}_{name}.{fmt}"
+
+
+def animation_file(value: str | Path, name: str, flag: str = "--animate") -> Path:
+    """The animated GIF of ``name`` (no suffix) beside the pictures of ``--plot VALUE``
+    (:func:`plot_target`): ``<folder>/<name>.gif`` for a folder, ``dir/<stem>_<name>.gif``
+    for a file ``dir/<stem>.<png|svg|pdf>`` — whatever the pictures' format.
+
+    Raises
+    ------
+    DeformClosureError
+        ``--plot`` naming a device or a FIFO (``/dev/null``): the GIF has nowhere beside
+        it to go.
+
+    Examples
+    --------
+    >>> str(animation_file("out", "escape")), str(animation_file("out/fig.pdf", "escape"))
+    ('out/escape.gif', 'out/fig_escape.gif')
+    """
+    folder, _, stem = plot_target(value)
+    p = Path(value)
+    if p.exists() and not (p.is_dir() or p.is_file()):
+        raise DeformClosureError(f"{flag}: --plot {value} is a device or a pipe, with no folder "
+                                 "for the GIF beside it; give --plot a folder or a "
+                                 ".png/.svg/.pdf file")
+    return folder / (f"{name}.gif" if stem is None else f"{stem}_{name}.gif")

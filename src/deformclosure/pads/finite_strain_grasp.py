@@ -122,6 +122,11 @@ class FiniteStrainResult:
         return self.linear.limit
 
     @property
+    def e_L(self) -> float | None:
+        """The material's elastic-limit strain (the same for both models)."""
+        return self.linear.e_L
+
+    @property
     def n_nodes(self) -> int:
         return self.linear.n_nodes
 

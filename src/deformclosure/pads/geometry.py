@@ -33,8 +33,8 @@ from ..contact.bodies import FLANK_ANGLE, Capsule
 from ..errors import GraspError
 from ..geometry import is_finite_number, touch_tolerance
 
-__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "pad_outline", "placed_pads",
-           "FLANK_ANGLE"]
+__all__ = ["Pad", "GraspAxis", "FirstTouch", "first_touch", "pad_outline", "pad_pair",
+           "placed_pads", "face_shift", "pad_depth", "FLANK_ANGLE"]
 
 
 @dataclass(frozen=True)
@@ -249,19 +249,34 @@ def pad_outline(pad: Pad, axis: GraspAxis, z: float, side: int, depth: float,
     return o[None] + x[:, None] * nrm[None] + (z - side * sd)[:, None] * a[None]
 
 
-def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
-                nodes: np.ndarray, u: np.ndarray, forces: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Outlines (m) of pads A and B at squeeze ``delta`` (m), where they touch the part
-    displaced by ``u``.
+def pad_depth(pad: Pad, touch: FirstTouch) -> float:
+    """How deep (m) a drawn or exported pad's body reaches behind its face:
+    ``0.15 max(σ0, W/2 + ρ)``, a stub that keeps the pads near the part."""
+    return 0.15 * max(touch.sigma0, pad.half_span)
 
-    Each pad moves in by half the squeeze from its first-touch face position; the part
-    floats, so its displacement has a gauge (SPEC §6) that may shift it along the axis
-    against that split. The pads are shifted together by the mean offset of the loaded
-    nodes from the faces (a loaded node of pad A sits at ``s + a·u = z_A − d(x) − d'(x) n·u``,
-    of pad B at ``s + a·u = z_B + d(x) + d'(x) n·u``: the model's gaps, linearised in
-    ``u``; a node pushed along ``+a`` is pad A's), so the faces sit on the deformed part
-    to first order in ``u``.
+
+def pad_pair(pad: Pad, axis: GraspAxis, touch: FirstTouch, z_a: float, z_b: float,
+             depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Outlines (m, as :func:`pad_outline`) of pad A with its face at ``z_a`` and pad B
+    at ``z_b`` (m, along ``axis``), ``depth`` (m) of body behind each face — less between
+    back-to-back pads opening in a hole (``touch.expanding``): at most 0.45 of the faces'
+    distance, so the two bodies never overlap."""
+    if touch.expanding:                     # back to back inside the hole
+        depth = min(depth, 0.45 * max(z_a - z_b, 1e-12))
+    return pad_outline(pad, axis, z_a, 1, depth), pad_outline(pad, axis, z_b, -1, depth)
+
+
+def face_shift(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
+               nodes: np.ndarray, u: np.ndarray, forces: np.ndarray) -> float:
+    """Common shift (m, along ``axis``) that puts both pads, each moved in by half the
+    squeeze ``delta`` (m) from its first-touch face, on the part displaced by ``u``.
+
+    The part floats, so its displacement has a gauge (SPEC §6) that may shift it along
+    the axis against that split. The shift is the mean offset of the loaded nodes from
+    the faces (a loaded node of pad A sits at ``s + a·u = z_A − d(x) − d'(x) n·u``, of
+    pad B at ``s + a·u = z_B + d(x) + d'(x) n·u``: the model's gaps, linearised in ``u``;
+    a node pushed along ``+a`` is pad A's), so the faces sit on the deformed part to first
+    order in ``u``; 0 when nothing is loaded.
 
     Parameters
     ----------
@@ -273,12 +288,6 @@ def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
         Rest positions (m).
     u, forces : ndarray, shape (n, 2) or (2n,)
         Node displacements (m) and contact forces on the nodes (N).
-
-    Returns
-    -------
-    outline_a, outline_b : ndarray, shape (k, 2)
-        As :func:`pad_outline`; the body behind each face is 0.15 max(σ0, W/2 + ρ) deep
-        (less between back-to-back pads opening in a hole).
     """
     nodes = np.asarray(nodes, float)
     u = np.asarray(u, float).reshape(-1, 2)
@@ -288,17 +297,30 @@ def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
     fa = f @ a
     scale = np.abs(fa).max() if len(fa) else 0.0
     loaded = np.abs(fa) > 1e-9 * scale if scale > 0 else np.zeros(len(fa), bool)
-    if loaded.any():
-        s, x = axis.coordinates(nodes[loaded])
-        d, slope = pad.profile(x, capped=False)
-        ok = np.isfinite(d) & np.isfinite(slope)
-        # the model's gap, linearised in u (pads/contact.py): d(x) + d'(x) n·u
-        d = np.where(ok, d + np.where(ok, slope, 0.0) * (u[loaded] @ axis.normal), 0.0)
-        s = s + u[loaded] @ a
-        face = np.where(fa[loaded] > 0, s + d - za, s - d - zb)
-        shift = float(np.mean(face))
-        za, zb = za + shift, zb + shift
-    depth = 0.15 * max(touch.sigma0, pad.half_span)
-    if touch.expanding:                     # back to back inside the hole
-        depth = min(depth, 0.45 * max(za - zb, 1e-12))
-    return pad_outline(pad, axis, za, 1, depth), pad_outline(pad, axis, zb, -1, depth)
+    if not loaded.any():
+        return 0.0
+    s, x = axis.coordinates(nodes[loaded])
+    d, slope = pad.profile(x, capped=False)
+    ok = np.isfinite(d) & np.isfinite(slope)
+    # the model's gap, linearised in u (pads/contact.py): d(x) + d'(x) n·u
+    d = np.where(ok, d + np.where(ok, slope, 0.0) * (u[loaded] @ axis.normal), 0.0)
+    s = s + u[loaded] @ a
+    face = np.where(fa[loaded] > 0, s + d - za, s - d - zb)
+    return float(np.mean(face))
+
+
+def placed_pads(pad: Pad, axis: GraspAxis, touch: FirstTouch, delta: float,
+                nodes: np.ndarray, u: np.ndarray, forces: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Outlines (m) of pads A and B at squeeze ``delta`` (m), where they touch the part
+    displaced by ``u``: each moved in by half the squeeze from its first-touch face
+    position, both by :func:`face_shift` (whose parameters these are).
+
+    Returns
+    -------
+    outline_a, outline_b : ndarray, shape (k, 2)
+        As :func:`pad_pair`, :func:`pad_depth` deep.
+    """
+    shift = face_shift(pad, axis, touch, delta, nodes, u, forces)
+    return pad_pair(pad, axis, touch, touch.z_a + 0.5 * delta + shift,
+                    touch.z_b - 0.5 * delta + shift, pad_depth(pad, touch))

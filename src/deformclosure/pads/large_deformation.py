@@ -28,8 +28,9 @@ import numpy as np
 from ..contact.compliance import gauge_functionals
 from ..contact.large_deformation import (CapsuleObstacle, ContactState, FiniteStrainContact,
                                          follow_squeeze)
-from ..elasticity.critical_distance import averaged_strain_maximum, critical_distance_of
-from ..elasticity.finite_strain import averaged_stretch_maximum
+from ..elasticity.critical_distance import (averaged_strain_magnitude, averaged_strain_maximum,
+                                             critical_distance_of)
+from ..elasticity.finite_strain import averaged_stretch_magnitudes, averaged_stretch_maximum
 from ..elasticity.linear_energy import LinearEnergy
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 
@@ -113,13 +114,19 @@ class FiniteStrainCurve:
         """Separation (m) at squeeze ``delta`` (m)."""
         return self.touch.sigma0 - delta
 
+    def faces_at(self, delta: float) -> tuple[float, float]:
+        """Axial positions (m) of the faces of pads A and B at squeeze ``delta`` (m): each
+        moved in by half the squeeze beyond the first node contact (the part floats, so
+        the split is free); the part's displacements are in this frame."""
+        t = self.touch
+        half = 0.5 * (delta - self.delta0)
+        return t.z_a + self._gA + half, t.z_b - self._gB - half
+
     def bodies_at(self, delta: float) -> list[CapsuleObstacle]:
         """The two pads' capsules at squeeze ``delta`` (m): both have moved in by half the
         squeeze beyond the first node contact (the part floats, so the split is free)."""
-        t, ax, pad = self.touch, self.axis, self.pad
-        half = 0.5 * (delta - self.delta0)
-        zA = t.z_a + self._gA + half
-        zB = t.z_b - self._gB - half
+        ax, pad = self.axis, self.pad
+        zA, zB = self.faces_at(delta)
         o = np.asarray(ax.origin, float)
         a, n = self._a, self._n
         w = 0.5 * pad.width
@@ -276,6 +283,23 @@ class FiniteStrainCurve:
         if isinstance(law, LinearEnergy):      # the small-strain law: SPEC §6's measure
             return float(averaged_strain_maximum(mesh, law.small_strains(st.u), ell))
         return averaged_stretch_maximum(mesh, law.right_cauchy_green(st.u), ell)[0]
+
+    def strain_field(self, sigma: float, ell: float | None = None) -> np.ndarray:
+        """Per element, the averaged strain magnitude (m/m) whose maximum is
+        :meth:`strain` at ``sigma`` (m): SPEC §8's stretch measure, or §6's for the
+        small-strain law; zeros before contact; ``ValueError`` beyond the reachable
+        squeeze."""
+        mesh = self.owner.mesh
+        if self.touch is None or self.delta(sigma) <= self.delta0:
+            return np.zeros(len(mesh.triangles))
+        st = self.state(self.delta(sigma))
+        if st is None:
+            raise ValueError("separation beyond the reachable squeeze")
+        ell = critical_distance_of(mesh) if ell is None else ell
+        law = self.owner.law
+        if isinstance(law, LinearEnergy):
+            return averaged_strain_magnitude(mesh, law.small_strains(st.u), ell)
+        return averaged_stretch_magnitudes(mesh, law.right_cauchy_green(st.u), ell)
 
     def kinks(self) -> np.ndarray:
         """No exact breakpoints: the curve is smooth between contact events."""

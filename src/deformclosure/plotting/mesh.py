@@ -9,7 +9,7 @@ import numpy as np
 from ..units import length_scale
 
 __all__ = ["plot_mesh", "save_mesh_plot", "new_figure", "save_figure", "figure_axes", "save_plots",
-           "figure_path", "legend_outside", "legend_below", "side_colorbar"]
+           "save_figures", "figure_path", "legend_outside", "legend_below", "side_colorbar"]
 
 
 def new_figure(figsize=(6, 6)):
@@ -35,11 +35,20 @@ def save_plots(obj, target: str | Path, units: str, specs) -> list[Path]:
     figure ``name`` of ``--plot target`` (:func:`figure_path`) for every ``(name, fn,
     size)`` of ``specs`` (a suffix on ``name`` is dropped: the target sets the format);
     return the paths."""
-    paths = []
+    figs = []
     for name, fn, size in specs:
         fig, ax = new_figure(size)
         fn(obj, ax=ax, units=units)
-        path = figure_path(target, Path(name).stem)
+        figs.append((Path(name).stem, fig))
+    return save_figures(figs, target)
+
+
+def save_figures(figs, target: str | Path) -> list[Path]:
+    """Save (and close) each drawn ``(name, figure)`` of ``figs`` as figure ``name`` of
+    ``--plot target`` (:func:`figure_path`); return the paths, in order."""
+    paths = []
+    for name, fig in figs:
+        path = figure_path(target, name)
         save_figure(fig, path)
         paths.append(path)
     return paths

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..pads.geometry import pad_depth, pad_pair
 from ..units import length_scale
 from .grasp import quality_lines, sigma_marks
-from .mesh import (figure_axes, legend_below, legend_outside, figure_path, save_figure,
-                   side_colorbar)
+from .mesh import figure_axes, legend_below, legend_outside, save_figures, side_colorbar
 
 __all__ = ["plot_pad_quality", "plot_pad_grasp", "plot_pad_plan", "draw_pads", "save_pad_plots",
            "PadState", "pad_state", "curve_state", "draw_state", "plot_force_squeeze",
@@ -47,7 +47,7 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
 
     Parameters
     ----------
-    result : PadGraspResult
+    result : PadGraspResult or FiniteStrainResult
     ax : matplotlib Axes, optional
     units : str
         Length unit of σ; energies are drawn in mJ.
@@ -65,26 +65,10 @@ def plot_pad_quality(result, ax=None, units: str = "mm"):
     sigma_marks(ax, result.sigma_star, result.quality, result.sigma_L, s, units)
     ax.set_xlabel(f"pad separation σ ({units})")
     ax.set_ylabel("energy (mJ)")
-    ax.set_title(f"pads W = {result.pad.width * s:.3g}, ρ = {result.pad.radius * s:.3g} {units}: "
-                 f"{result.verdict}")
+    ax.set_title(f"{_model_tag(result)}pads W = {result.pad.width * s:.3g}, "
+                 f"ρ = {result.pad.radius * s:.3g} {units}: {result.verdict}")
     legend_outside(ax)
     return ax.figure
-
-
-def _capsule(pad, axis, z: float, side: int, s: float, depth: float) -> np.ndarray:
-    """Outline (in plot units) of a pad whose face is at axial position ``z``."""
-    a, n = axis.direction, axis.normal
-    h, r = 0.5 * pad.width, pad.radius
-    t = np.linspace(0, np.pi / 2, 24)
-    # Face side of the capsule in (x, s) with s measured from the face towards the part.
-    right = np.column_stack([h + r * np.sin(t), r - r * np.cos(t)])
-    prof = np.vstack([right[::-1] * [-1, 1], right])
-    back = np.array([[h + r, r + depth], [-h - r, r + depth]])
-    pts = np.vstack([prof, back])
-    x, sd = pts[:, 0], pts[:, 1]
-    o = np.asarray(axis.origin) + axis.offset * n
-    P = o[None] + x[:, None] * n[None] + (z - side * sd)[:, None] * a[None]
-    return P * s
 
 
 def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
@@ -95,7 +79,7 @@ def draw_pads(ax, result, sigma: float | None = None, units: str = "mm", **kw):
     curve = result.start_curve
     sigma = result.sigma0 if sigma is None else sigma
     delta, t = _path_motion(curve, sigma)
-    for P in _outlines_at(curve, result.pad, delta, t, _pad_depth(result)):
+    for P in _pads_at(curve, result.pad, delta, t, _pad_depth(result)):
         ax.fill(P[:, 0] * s, P[:, 1] * s, color=kw.get("color", "0.35"),
                 alpha=kw.get("alpha", 0.8), lw=0)
     return ax
@@ -119,7 +103,9 @@ class PadState:
     The part is drawn in the gauge of its solver (mean displacement and mean rotation
     zero, SPEC §6), the pads where the contact path puts them relative to it: pad A's
     face at ``z_a`` and pad B's at ``z_b`` along the axis (m), both moved by the part's
-    axial translation ``t`` of the path so that the pads touch the deformed part.
+    axial translation ``t`` of the path so that the pads touch the deformed part. A
+    finite-strain state (:func:`finite_strain_state`) is drawn in its own curve's frame,
+    its pads' faces given by the same ``delta`` and ``translation``.
 
     Attributes
     ----------
@@ -136,7 +122,8 @@ class PadState:
     strain : ndarray, shape (m,)
         Per element, the largest absolute principal value of the strain averaged over
         the critical-distance disc (dimensionless, m/m): SPEC §6's measure, whose maximum
-        is compared with ``e_L``.
+        is compared with ``e_L`` (finite strain: SPEC §8's averaged stretch magnitude
+        ``max |λᵢ − 1|``).
     pressure : ndarray, shape (n,)
         Contact pressure (Pa): normal force over the node's tributary boundary length
         times the thickness (:func:`deformclosure.fields.state_data`).
@@ -181,35 +168,85 @@ def curve_state(solver, curve, sigma: float, ell: float) -> PadState:
 
 
 def pad_state(result, sigma: float | None = None) -> PadState:
-    """The state of ``result`` (a PadGraspResult) on its start axis at ``sigma`` (m;
-    default σ*, or first touch when ``Q ≡ 0``)."""
+    """The state of ``result`` on its start axis at ``sigma`` (m; default σ*, or first
+    touch when ``Q ≡ 0``): a PadGraspResult's linear state, or a FiniteStrainResult's
+    finite-strain one (:func:`finite_strain_state`)."""
     if sigma is None:
         sigma = result.sigma_star if result.sigma_star is not None else result.sigma0
+    if elasticity_of(result) is not None:
+        return finite_strain_state(result, sigma)
     return curve_state(result.solver, result.start_curve, sigma,
                        result.limit.critical_distance)
 
 
-def _pad_outlines(curve, pad, state: PadState, scale: float, depth: float) -> list[np.ndarray]:
-    """Outlines (m) of pads A and B of ``curve`` at ``state``, displacements × ``scale``:
-    A's face at ``z_a − t``, B's at ``z_b − δ − t`` (the contact path's frame)."""
-    return _outlines_at(curve, pad, scale * state.delta, scale * state.translation, depth)
+def elasticity_of(result) -> str | None:
+    """``"neo-hookean"`` (or ``"linear"``: the small-strain law with the exact gap) for
+    a finite-strain result (SPEC §8,
+    :class:`~deformclosure.pads.finite_strain_grasp.FiniteStrainResult`), ``None`` for
+    the linear pads model's."""
+    from ..pads.finite_strain_grasp import FiniteStrainResult
+
+    return result.elasticity if isinstance(result, FiniteStrainResult) else None
 
 
-def _outlines_at(curve, pad, delta: float, t: float, depth: float) -> list[np.ndarray]:
-    """Outlines (m) of the pads of ``curve`` at squeeze ``delta`` and part translation
-    ``t`` (m): A's face at ``z_a − t``, B's at ``z_b − δ − t``."""
+#: How a finite-strain run's pictures name its model.
+MODEL_NAMES = {"neo-hookean": "neo-Hookean", "linear": "linear law, exact gap"}
+
+
+def finite_strain_state(result, sigma: float) -> PadState:
+    """The finite-strain state (SPEC §8) of ``result`` (a FiniteStrainResult) at
+    ``sigma`` (m): its displacements and contact forces
+    (:meth:`~deformclosure.pads.finite_strain_grasp.FiniteStrainResult.state_at`), the
+    strain measure it compares with ``e_L`` per element
+    (:meth:`~deformclosure.pads.large_deformation.FiniteStrainCurve.strain_field`), and
+    the pads where that model puts them (their faces,
+    :meth:`~deformclosure.pads.large_deformation.FiniteStrainCurve.faces_at`), expressed
+    as :class:`PadState`'s squeeze and translation."""
+    from ..fields import state_data
+
+    c = result.start_curve
+    ell = result.limit.critical_distance
+    mesh = result.solver.mesh
+    n = mesh.n_nodes
+    fs = result.state_at(sigma, "picture")
+    forces = np.asarray(fs.forces, float).reshape(n, 2)
+    delta, t = 0.0, 0.0
+    if c.touch is not None:
+        d = float(c.delta(sigma))
+        if d > c.delta0:
+            z_a, z_b = c.faces_at(d)
+            # A's face at touch.z_a − t, B's at touch.z_b − δ − t (draw_state's frame)
+            t = c.touch.z_a - z_a
+            delta = c.touch.z_b - z_b - t
+    point, _ = state_data(mesh, fs, ell)
+    return PadState(float(sigma), delta, np.asarray(fs.displacement, float).reshape(n, 2), t,
+                    forces, np.asarray(c.strain_field(sigma, ell), float),
+                    np.asarray(point["contact_pressure"], float).reshape(-1),
+                    float(c.energy_at(sigma)), float(c.axial_force(sigma)))
+
+
+def _model_tag(result) -> str:
+    """``"neo-Hookean: "`` and the like before a finite-strain run's titles, else ``""``."""
+    e = elasticity_of(result)
+    return "" if e is None else f"{MODEL_NAMES.get(e, e)}: "
+
+
+def _pads_at(curve, pad, delta: float, t: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Outlines (m, :func:`~deformclosure.pads.geometry.pad_pair`) of the pads of
+    ``curve`` at squeeze ``delta`` and part translation ``t`` (m), the contact path's
+    frame: A's face at ``z_a − t``, B's at ``z_b − δ − t``."""
     touch = curve.touch
-    if touch.expanding:                         # back to back inside the hole
-        depth = min(depth, 0.45 * max(abs(touch.z_a - touch.z_b) + delta, 1e-12))
-    return [_capsule(pad, curve.axis, touch.z_a - t, 1, 1.0, depth),
-            _capsule(pad, curve.axis, touch.z_b - delta - t, -1, 1.0, depth)]
+    return pad_pair(pad, curve.axis, touch, touch.z_a - t, touch.z_b - delta - t, depth)
 
 
 def _pad_depth(result) -> float:
-    """How far (m) the drawn pads reach behind their faces: a stub, at most 5 % of the
-    part's size, so that the frame holding them stays on the part."""
-    return min(0.15 * max(result.sigma0, result.pad.half_span),
-               0.05 * result.solver.mesh.diameter)
+    """How far (m) the drawn pads reach behind their faces: the geometry's stub
+    (:func:`~deformclosure.pads.geometry.pad_depth`), at most 5 % of the part's size, so
+    that the frame holding them stays on the part."""
+    touch = result.start_curve.touch
+    if touch is None:
+        return 0.0
+    return min(pad_depth(result.pad, touch), 0.05 * result.solver.mesh.diameter)
 
 
 def _frame(ax, pts: np.ndarray, margin: float = 0.04) -> None:
@@ -224,8 +261,9 @@ def _frame(ax, pts: np.ndarray, margin: float = 0.04) -> None:
 
 def _strain_label(result, units: str) -> str:
     s = 1.0 / length_scale(units)
-    return (f"averaged strain magnitude (m/m)\nover ℓ = "
-            f"{result.limit.critical_distance * s:.3g} {units}")
+    what = ("averaged strain magnitude" if elasticity_of(result) in (None, "linear")
+            else "averaged stretch magnitude max|λ−1|")
+    return f"{what} (m/m)\nover ℓ = {result.limit.critical_distance * s:.3g} {units}"
 
 
 def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: float = 1.0,
@@ -250,10 +288,11 @@ def draw_state(ax, mesh, curve, pad, state: PadState, units: str = "mm", scale: 
                     ls="--", zorder=2, label="part at rest" if i == 0 else None)
         ax.plot(xy[ring, 0], xy[ring, 1], color="k", lw=1.0, zorder=3)
     if depth is None:
-        depth = 0.15 * max(curve.sigma0, pad.half_span)
+        depth = pad_depth(pad, curve.touch) if curve.touch is not None else 0.0
     pts = [xy]
     if curve.touch is not None:
-        for k, P in enumerate(_pad_outlines(curve, pad, state, scale, depth)):
+        for k, P in enumerate(_pads_at(curve, pad, scale * state.delta,
+                                       scale * state.translation, depth)):
             ax.fill(P[:, 0] * s, P[:, 1] * s, color="0.35", alpha=0.75, lw=0, zorder=4,
                     label="pads" if k == 0 else None)
             pts.append(P * s)
@@ -312,7 +351,8 @@ def plot_pad_grasp(result, mesh=None, ax=None, units: str = "mm", scale: float =
 
     Parameters
     ----------
-    result : PadGraspResult
+    result : PadGraspResult or FiniteStrainResult
+        A finite-strain result (SPEC §8) draws its own state (title names the model).
     mesh : Mesh, optional
         Unused: the picture draws the mesh ``result`` was solved on (``result.solver``).
     ax : matplotlib Axes, optional
@@ -349,7 +389,8 @@ def plot_pad_grasp(result, mesh=None, ax=None, units: str = "mm", scale: float =
     ax.set_ylabel(f"y ({units})")
     how = "true scale" if scale == 1 else f"displacements × {scale:g}"
     at = "σ*" if sigma is None and result.sigma_star is not None else "σ"
-    ax.set_title(f"{result.verdict}: {at} = {st.sigma * s:.4g} {units}, F = {st.force:.4g} N, "
+    ax.set_title(f"{_model_tag(result)}{result.verdict}: {at} = {st.sigma * s:.4g} {units}, "
+                 f"F = {st.force:.4g} N, "
                  f"Q* = {result.quality * 1e3:.4g} mJ\nmax averaged strain "
                  f"{st.strain.max():.3g}" + ("" if e_L is None else f" (e_L = {e_L:g})")
                  + f"; {how}", fontsize=9)
@@ -375,7 +416,7 @@ def plot_force_squeeze(result, ax=None, units: str = "mm"):
 
     Parameters
     ----------
-    result : PadGraspResult
+    result : PadGraspResult or FiniteStrainResult
     ax : matplotlib Axes, optional
     units : str
         Length unit of σ.
@@ -401,7 +442,7 @@ def plot_force_squeeze(result, ax=None, units: str = "mm"):
     ax.set_xlabel(f"pad separation σ ({units})")
     ax.set_ylabel("grip force F (N)")
     stiff = result.stiffness
-    ax.set_title("force against squeeze" + ("" if stiff is None else
+    ax.set_title(f"{_model_tag(result)}force against squeeze" + ("" if stiff is None else
                                             f"; stiffness at σ* {stiff:.4g} N/m"))
     ax.grid(alpha=0.3)
     legend_outside(ax)
@@ -416,27 +457,43 @@ def _hole_of(mesh, curve) -> int | None:
     return next((k for k, lp in enumerate(mesh.hole_loops) if node in set(lp.tolist())), None)
 
 
-def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
-    """Up to ``n`` axes of the escape path at σ* — the start, the saddle, the end and
-    evenly between — each solved at σ*: ``(index on the path, curve, state)``."""
-    path = result.escape_path
-    if not path or result.sigma_star is None:
+def path_indices(k: int, n: int, saddle: int | None = None) -> list[int]:
+    """Up to ``n`` indices into a path of ``k`` points, evenly spread, always the start,
+    the end and ``saddle`` (so at least those, even when ``n`` is smaller); sorted.
+
+    Examples
+    --------
+    >>> path_indices(10, 4), path_indices(10, 3, saddle=4), path_indices(3, 8)
+    ([0, 3, 6, 9], [0, 4, 9], [0, 1, 2])
+    """
+    if k <= 0:
         return []
-    k = len(path)
     idx = set(np.linspace(0, k - 1, max(min(n, k), 1)).round().astype(int).tolist())
-    keep = {0, k - 1}
-    if result.saddle is not None:
-        hit = [i for i, a in enumerate(path) if np.isclose(a.angle, result.saddle.angle)
-               and np.isclose(a.offset, result.saddle.offset)]
-        keep |= set(hit[:1])
+    keep = {0, k - 1} | ({int(saddle)} if saddle is not None else set())
     idx |= keep
     while len(idx) > max(n, len(keep)):      # keep the start, the end and the saddle
         rest = sorted(idx - keep)
         idx.discard(rest[len(rest) // 2])
+    return sorted(idx)
+
+
+def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
+    """Up to ``n`` axes of the escape path at σ* — the start, the saddle, the end and
+    evenly between — each solved at σ*: ``(index on the path, curve, state)``. Of a
+    finite-strain result, its linear twin's (the linear model found the path, SPEC §8)."""
+    if elasticity_of(result) is not None:
+        result = result.linear
+    path = result.escape_path
+    if not path or result.sigma_star is None:
+        return []
+    saddle = None
+    if result.saddle is not None:
+        saddle = next((i for i, a in enumerate(path) if np.isclose(a.angle, result.saddle.angle)
+                       and np.isclose(a.offset, result.saddle.offset)), None)
     solver, pad, sig = result.solver, result.pad, result.sigma_star
     hole = _hole_of(solver.mesh, result.start_curve)
     out = []
-    for i in sorted(idx):
+    for i in path_indices(len(path), n, saddle):
         curve = solver.curve(path[i], pad, sig, hole)
         out.append((i, curve, curve_state(solver, curve, sig, result.limit.critical_distance)))
     return out
@@ -445,7 +502,8 @@ def escape_states(result, n: int = 6) -> list[tuple[int, object, PadState]]:
 def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0):
     """The escape path at σ* as a strip of small pictures: the part deformed on each of up
     to ``n`` axes along it (the start, the saddle — title in red —, the end), the pads,
-    the grasp energy ``U`` (mJ) in each title, one strain colour scale for all.
+    the grasp energy ``U`` (mJ) in each title, one strain colour scale for all. Of a
+    finite-strain result, its linear twin's path at the linear σ*, and the title says so.
 
     Returns
     -------
@@ -456,6 +514,9 @@ def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0)
 
     from .mesh import new_figure
 
+    model = elasticity_of(result)
+    if model is not None:
+        result = result.linear
     states = escape_states(result, n)
     if not states:
         return None
@@ -489,8 +550,10 @@ def plot_escape_strip(result, units: str = "mm", n: int = 6, scale: float = 1.0)
         _frame(ax, allp)
     cb = fig.colorbar(pc, ax=list(axes), shrink=0.8, pad=0.02)
     cb.set_label("averaged strain (m/m)", fontsize=8)
-    _title_above(fig, axes, f"escape path at σ* = {result.sigma_star * s:.4g} {units}: U_A = "
-                 f"{_energy_text(result.U_A)} over the start's U = "
+    twin = "" if model is None else (f"linear twin of the {MODEL_NAMES.get(model, model)} run "
+                                     "(linear model's σ*, U, U_A): ")
+    _title_above(fig, axes, f"{twin}escape path at σ* = {result.sigma_star * s:.4g} {units}: "
+                 f"U_A = {_energy_text(result.U_A)} over the start's U = "
                  f"{states[0][2].energy * 1e3:.4g} mJ")
     return fig
 
@@ -667,7 +730,8 @@ def _verified_results(plan) -> list[tuple[int, dict, object]]:
         res = next((t for t in plan.top if np.isclose(t.axis.angle, r["angle"])
                     and np.isclose(t.axis.offset, r["offset"])), None)
         if res is not None and getattr(res, "solver", None) is not None:
-            out.append((k, r, getattr(res, "linear", res)))
+            out.append((k, r, res if elasticity_of(res) is not None
+                        else getattr(res, "linear", res)))
     return out
 
 
@@ -770,7 +834,9 @@ def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: f
     (:func:`~deformclosure.plotting.mesh.figure_path`): ``grasp`` (deformed at σ*),
     ``quality`` (``U``, ``U_A``, ``U_L``, ``Q`` against σ), ``force`` (``F(σ)``),
     ``escape`` (the escape path's strip, when there is one) and ``convergence`` (when
-    ``convergence`` has several levels). Returns the paths written."""
+    ``convergence`` has several levels). A finite-strain result (SPEC §8) draws its own
+    state, curves and force; the escape strip is its linear twin's, titled so. Returns
+    the paths written."""
     from .mesh import new_figure
 
     check_scale(scale)
@@ -787,12 +853,7 @@ def save_pad_plots(result, mesh, target: str | Path, units: str = "mm", scale: f
     if convergence is not None and len(convergence) > 1:
         fig, ax = new_figure((7, 4.5))
         figs.append(("convergence", plot_convergence(convergence, ax=ax, units=units)))
-    paths = []
-    for name, f in figs:
-        path = figure_path(target, name)
-        save_figure(f, path)
-        paths.append(path)
-    return paths
+    return save_figures(figs, target)
 
 
 def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
@@ -820,9 +881,4 @@ def save_pad_plan_plots(plan, mesh, target: str | Path, units: str = "mm",
         import matplotlib.pyplot as plt
 
         plt.close(fig)
-    paths = []
-    for name, f in figs:
-        path = figure_path(target, name)
-        save_figure(f, path)
-        paths.append(path)
-    return paths
+    return save_figures(figs, target)

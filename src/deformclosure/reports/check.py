@@ -73,8 +73,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
 
     from ..pads.refine import check_accuracy, check_refine
 
+    from ..plotting.animate import check_animate
+
     p = params
     _check_params(p)
+    check_animate(p)
     if p.get("elasticity") == "neo-hookean":
         raise GraspError("--elasticity neo-hookean: not supported by check yet (finite strain, "
                          "SPEC §8, covers pads on a grasp axis: optimize and plan); use "
@@ -321,6 +324,18 @@ def _writer(rep: Report, report: bool) -> list[str]:
         path = figure_path(p["plot"], "check", single=True)
         save_figure(plot_check_and_escape(inp.mesh, res, rel, fingers, units=units), path)
         written.append(path)
+        from ..plotting.animate import check_animate
+
+        gif = check_animate(p)
+        if gif is not None:
+            from ..plotting.animate import check_escape_animation
+            from ..plotting.escape import escape_note
+
+            done = check_escape_animation(inp.mesh, rel, fingers, gif, units=units)
+            if done is None:
+                rep.warnings.append(f"--animate: {escape_note(rel)}; no GIF written")
+            else:
+                written.append(done)
         conv = rep.data.get("convergence") or []
         if len(conv) > 1:           # a refined run: U_A and the quality against the nodes
             from ..plotting.pads import plot_convergence

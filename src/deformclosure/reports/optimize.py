@@ -18,6 +18,7 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     given); lengths in ``units`` (default the part's); ``eps`` in J."""
     from ..fields import check_field_path
 
+    from ..plotting.animate import check_animate
     from ..plotting.pads import check_scale
 
     p = params
@@ -25,6 +26,11 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         check_field_path(p["export_fields"])
     p["scale"] = check_scale(p.get("scale", 1.0))
     model = p["model"] or ("paper" if p["jaws"] is not None else "pads")
+    if p.get("animate"):
+        if model == "paper":
+            raise GraspError("--animate: animates the pads model's escape path; drop it for "
+                             "--model paper / --jaws (its pictures are in --plot)")
+        check_animate(p)
     _check_friction_request(p, model)
     if p.get("elasticity") == "neo-hookean" and model == "paper":
         raise GraspError("--elasticity neo-hookean: only with the pads model (SPEC §8); drop "
@@ -299,6 +305,8 @@ def _clean(x: float) -> str:
 
 
 def _pads_writer(inp):
+    from ..plotting.animate import check_animate
+
     def write(rep: Report, report: bool) -> list[str]:
         write_report(rep, report)
         fine, p, written = rep.result.finest, rep.params, []
@@ -313,11 +321,22 @@ def _pads_writer(inp):
         if p["plot"]:
             from ..plotting.pads import save_pad_plots
 
-            # the pads' pictures draw the linear model's state (finite strain: its twin)
-            written += save_pad_plots(getattr(fine, "linear", fine), inp.mesh, p["plot"],
+            # finite strain: its own state and curves; the escape strip is the linear twin's
+            written += save_pad_plots(fine, inp.mesh, p["plot"],
                                       units=inp.unit if inp.unit != "m" else "mm",
                                       scale=p.get("scale", 1.0),
                                       convergence=rep.data.get("convergence"))
+        gif = check_animate(p)
+        if gif is not None:
+            from ..plotting.animate import pad_escape_animation
+
+            done = pad_escape_animation(fine, gif, units=inp.unit if inp.unit != "m" else "mm",
+                                        scale=p.get("scale", 1.0))
+            if done is None:
+                rep.warnings.append("--animate: no escape path to animate (Q* = 0, or U_A "
+                                    "infinite); no GIF written")
+            else:
+                written.append(done)
         return [str(w) for w in written]
 
     return write

@@ -157,6 +157,10 @@ def _plot(what: str, single: bool = False) -> Opt:
                help=f"{what}: {where}.")
 
 
+_ANIMATE = Opt("animate", ("--animate",), "flag", False, role="display",
+               help="With --plot: also write the escape path as an animated GIF beside the "
+                    "pictures (escape.gif in a folder, <stem>_escape.gif beside a file; "
+                    "optimize: pads model). Needs Pillow.")
 _SCALE = Opt("scale", ("--scale",), "float", 1.0, role="display", show_default=True,
              help="pads pictures (--plot): draw the displacements this many times their size "
                   "(1 = true scale; the pads move with the part).")
@@ -220,6 +224,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         _plot("The pictures (pads: deformed part at sigma* with strain and contact pressure, "
               "Q and force against sigma, escape path, convergence)"),
         _SCALE,
+        _ANIMATE,
         Opt("export_graph", ("--export-graph",), "file", role="output",
             help="paper model: write the contact graph (JSON)."),
         Opt("export_fields", _FIELDS, "file", role="output",
@@ -235,6 +240,7 @@ OPTIONS: dict[str, tuple[Opt, ...]] = {
         _OUTPUT,
         _plot("Draw the part, fingers, contact forces, escaping motion and escape path",
               single=True),
+        _ANIMATE,
         Opt("grid_steps", ("--grid-steps",), "int", 48, show_default=True,
             help="Release landscape: translation steps per part diameter (at most half the "
                  "smallest disc radius per step)."),
