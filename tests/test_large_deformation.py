@@ -337,8 +337,8 @@ def test_neo_hookean_optimum_converges_under_refinement_like_the_linear_one():
     2.37 / 2.33 / 2.39 mm move by < 2 % of σ0 but not monotonically). Levels that quarter
     the area from 2 mm² (162, 599, 2 275 nodes) do not show it for σ* and σ_L: their two
     coarse meshes have elements larger than the critical distance (0.65 mm) and the pad
-    (docs/large_deformation.md, "Convergence under refinement"). Several minutes on a
-    loaded 2-core machine."""
+    (docs/large_deformation.md, "Convergence under refinement"). ~100 s (the 2 813-node
+    level's finite-strain search is most of it), with qdldl."""
     from deformclosure.pads.finite_strain_grasp import optimize_finite_strain
     from deformclosure.pads.optimize import optimize_pads
 

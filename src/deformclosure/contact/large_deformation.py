@@ -65,7 +65,7 @@ NONMONOTONE = 10.0
 MAX_HALVINGS = 5
 #: Factorisation of the Newton systems: ``"qdldl"`` (when installed) or ``"superlu"``.
 #: ``benchmarks/bench_kkt_solvers.py`` (notched bar, 5 088 nodes, 54 systems of one
-#: curve): SuperLU 196 ms per system, qdldl's numeric refactorisation 64 ms, residuals
+#: curve): SuperLU 68 ms per system, qdldl's numeric refactorisation 21 ms, residuals
 #: 1.5e-12 and 2.9e-13; 3–12x faster on 600–5 000 nodes.
 LINEAR_SOLVER = "qdldl" if _qdldl is not None else "superlu"
 #: The qdldl shift ``ε`` relative to the tangent's mean diagonal: ``+ε`` on the
