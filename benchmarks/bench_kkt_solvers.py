@@ -3,18 +3,19 @@
 The Newton matrix of :class:`deformclosure.contact.large_deformation.FiniteStrainContact`
 is symmetric and indefinite: ``[[K_T − Σλ∇²g, −Jᵀ, −Gᵀ], [−J, D, 0], [−G, 0, 0]]``, its
 tangent block only positive *semi*-definite on its own (the gauge removes the rigid
-modes), its pattern fixed along a squeeze. This records every Newton system of one
-neo-Hookean U(σ) curve of the notched bar (~5k nodes, round pads r 2 mm, first touch to
-40 % squeeze) and times, on the same matrices:
+modes), its pattern fixed along a squeeze. This records (through SuperLU) the Newton
+systems of one neo-Hookean U(σ) curve of the notched bar (~5k nodes, round pads r 2 mm,
+first touch to 40 % squeeze) and times, on the same matrices:
 
-- ``superlu``: what the solver does, ``splu(KKT, permc_spec="NATURAL")`` on the METIS
-  nested-dissection order (partial pivoting), one fresh factorisation per Newton step;
-- ``superlu-colamd``: SuperLU in its own column order;
-- ``qdldl``: a symmetric LDLᵀ without pivoting (AMD order): the first factorisation
-  (symbolic + numeric) and then ``Solver.update`` (numeric only, the pattern reused);
-  the unregularised matrix, and the static regularisation ``±ε`` (ε = 1e-12 × the tangent's mean
-  diagonal) with iterative refinement on the true matrix to a residual of 1e-13 (the usual way to factor such KKT systems without
-  pivoting);
+- ``superlu``: the solver's fallback (and its only path without qdldl),
+  ``splu(KKT, permc_spec="NATURAL")`` on the METIS nested-dissection order (partial
+  pivoting), one fresh factorisation per Newton step;
+- ``superlu (COLAMD)``: SuperLU in its own column order;
+- ``qdldl``: a symmetric LDLᵀ without pivoting (AMD order) — unshifted (it meets zero
+  pivots), and shifted by ``±ε`` (ε = 1e-12 × the tangent's mean diagonal, in a pattern
+  fixed along the curve) with iterative refinement on the true matrix to a residual of
+  1e-13: the first factorisation (symbolic + numeric), then ``Solver.update`` (numeric
+  only) — what the solver does when qdldl is installed;
 
 each with the relative residual ``‖A x − b‖∞ / ‖b‖∞`` of its solution.
 
