@@ -18,6 +18,7 @@ import time
 import numpy as np
 
 from deformclosure import Part, mesh_part
+from deformclosure.contact.large_deformation import LINEAR_SOLVER
 from deformclosure.pads.contact import PadContact
 from deformclosure.pads.finite_strain_grasp import optimize_finite_strain
 from deformclosure.pads.geometry import GraspAxis, Pad
@@ -44,6 +45,7 @@ def main() -> None:
     args = ap.parse_args()
     args.quick = args.quick or args.smoke
     grow = 4.0 if args.quick else 1.0
+    print(f"Newton systems factorised by {LINEAR_SOLVER} (benchmarks/bench_kkt_solvers.py)")
     print(f"{'case':32} {'nodes':>6} {'t lin':>7} {'t neo':>7} {'ratio':>6} "
           f"{'dU':>7} {'dF':>7} {'dsig*':>7} {'dQ*':>7}  Q* neo (J)")
     for name, path, (p, q), width, radius in (CASES[:1] if args.smoke else CASES):
