@@ -379,7 +379,7 @@ def test_neo_hookean_pictures_draw_the_finite_strain_state(neo):
     c = fs.start_curve
     ax = pp.plot_pad_grasp(fs).axes[0]
     title = ax.get_title()
-    assert title.startswith("neo-Hookean: ")
+    assert title.startswith("neo-Hookean: ") and "max averaged stretch max|λ−1|" in title
     assert f"σ* = {fs.sigma_star / MM:.4g} mm" in title and f"F = {fs.force:.4g} N" in title
     assert f"{lin.sigma_star / MM:.4g} mm" not in title
     # the rest at a separation of the run's curve halfway to σ_L (this σ* is at touch:
@@ -388,7 +388,7 @@ def test_neo_hookean_pictures_draw_the_finite_strain_state(neo):
               key=lambda v: abs(v - 0.5 * (fs.sigma0 + fs.sigma_L)))
     ax = pp.plot_pad_grasp(fs, sigma=sig).axes[0]
     title = ax.get_title()
-    assert title.startswith("neo-Hookean: ") and f"σ = {sig / MM:.4g} mm" in title
+    assert title.startswith("neo-Hookean: ") and "max averaged stretch max|λ−1|" in title and f"σ = {sig / MM:.4g} mm" in title
     u = fs.state_at(sig, "s").displacement.reshape(-1, 2)
     u_lin = lin.state_at(sig, "s").displacement.reshape(-1, 2)
     assert np.abs(u - u_lin).max() > 0.01 * np.abs(u).max() > 0

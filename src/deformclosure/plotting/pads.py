@@ -389,9 +389,11 @@ def plot_pad_grasp(result, mesh=None, ax=None, units: str = "mm", scale: float =
     ax.set_ylabel(f"y ({units})")
     how = "true scale" if scale == 1 else f"displacements × {scale:g}"
     at = "σ*" if sigma is None and result.sigma_star is not None else "σ"
+    measure = ("strain" if elasticity_of(result) in (None, "linear")
+               else "stretch max|λ−1|")        # SPEC §8's measure for the finite-strain law
     ax.set_title(f"{_model_tag(result)}{result.verdict}: {at} = {st.sigma * s:.4g} {units}, "
                  f"F = {st.force:.4g} N, "
-                 f"Q* = {result.quality * 1e3:.4g} mJ\nmax averaged strain "
+                 f"Q* = {result.quality * 1e3:.4g} mJ\nmax averaged {measure} "
                  f"{st.strain.max():.3g}" + ("" if e_L is None else f" (e_L = {e_L:g})")
                  + f"; {how}", fontsize=9)
     legend_below(ax)
