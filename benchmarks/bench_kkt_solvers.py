@@ -102,6 +102,17 @@ def regularised(A: sp.csc_matrix, n_u: int, eps: float) -> sp.csc_matrix:
     return out
 
 
+def factored(solver, A):
+    """``(solver, first)``: a new qdldl factorisation of ``A`` (symbolic and numeric) when
+    ``solver`` is None, else ``solver`` refactorised numerically on the same pattern."""
+    import qdldl
+
+    if solver is None:
+        return qdldl.Solver(A), True
+    solver.update(A)
+    return solver, False
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--max-area", type=float, default=0.055, help="mm² (0.055: ~5k nodes)")
@@ -110,8 +121,6 @@ def main() -> None:
     args = ap.parse_args()
     if args.smoke:
         args.max_area, args.separations = 0.5, 3
-    import qdldl
-
     n_nodes, systems, t_curve = record(args.max_area, args.separations)
     n = systems[0][0].shape[0]
     n_u = 2 * n_nodes
@@ -138,12 +147,8 @@ def main() -> None:
         # qdldl, no regularisation: fresh, then numeric update on the fixed pattern
         try:
             t0 = time.perf_counter()
-            if solver is None:
-                solver = qdldl.Solver(A)
-                name = "qdldl first (symbolic+numeric)"
-            else:
-                solver.update(A)
-                name = "qdldl update (numeric)"
+            solver, first = factored(solver, A)
+            name = "qdldl first (symbolic+numeric)" if first else "qdldl update (numeric)"
             x = solver.solve(b)
             add(name, time.perf_counter() - t0, residual(A, x, b))
         except Exception:                             # a zero pivot
@@ -155,12 +160,8 @@ def main() -> None:
         if not same:
             solver_reg, pattern = None, Ar.indices.copy()
         t0 = time.perf_counter()
-        if solver_reg is None:
-            solver_reg = qdldl.Solver(Ar)
-            name = "qdldl ±eps + refinement, first"
-        else:
-            solver_reg.update(Ar)
-            name = "qdldl ±eps + refinement, update"
+        solver_reg, first = factored(solver_reg, Ar)
+        name = f"qdldl ±eps + refinement, {'first' if first else 'update'}"
         x, k = qdldl_regularised(solver_reg, A, b)
         sweeps.append(k)
         add(name, time.perf_counter() - t0, residual(A, x, b))

@@ -37,20 +37,8 @@ def averaged_stretch_magnitudes(mesh, C: np.ndarray, ell: float) -> np.ndarray:
     """Per element, the stretch magnitude ``max |λᵢ − 1|`` (dimensionless, m/m) of the
     right Cauchy–Green tensor averaged over its critical-distance disc: the field whose
     maximum :func:`averaged_stretch_maximum` finds (by bounds, without averaging every
-    element), for pictures.
-
-    Parameters
-    ----------
-    mesh : Mesh
-    C : ndarray, shape (m, 3)
-        Element right Cauchy–Green tensors ``[C11, C22, C12]`` (dimensionless).
-    ell : float
-        Critical distance (m), >= 0.
-
-    Returns
-    -------
-    ndarray, shape (m,)
-    """
+    element), for pictures. Parameters as :func:`averaged_stretch_maximum`; returns an
+    array of shape ``(m,)``."""
     C = np.asarray(C, float)
     disc = disc_average(mesh, ell)
     return stretch_magnitudes(C if disc.ell == 0.0 else disc.averaged(C))
