@@ -97,8 +97,8 @@ def test_holding_refuses_what_would_not_fit_beside_it():
 
 def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
     """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
-    level (their solvers stay in the result), recomputed here from the recorded
-    estimates."""
+    level (its mesh's solver and curves stay resident; its twin goes with the level),
+    recomputed here from the sizes each check was given, with one solver."""
     import deformclosure as dc
     import deformclosure.pads.size_limits as psl
     from deformclosure.pads import GraspAxis, Pad, pad_grasp
@@ -108,7 +108,7 @@ def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
 
     def recorded(*a, **k):
         est = orig(*a, **k)
-        seen.append(est)
+        seen.append((a[0], k, est))
         return est
 
     monkeypatch.setattr(psl, "check_plan_size", recorded)
@@ -117,9 +117,12 @@ def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
                     n_angles=8, n_offsets=10, noise=False)
     assert len(res.levels) >= 2 and len(seen) >= 2
     kept = 0.0
-    for est in seen:
+    for n_b, k, est in seen:
         assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
-        kept += limits.kept_bytes(est)
+        one = limits.estimate_model_bytes(
+            "pads", n_boundary=n_b, n_nodes=k["n_nodes"], n_triangles=k["n_triangles"],
+            area=k["area"], ell=k["ell"], solvers=1, n_axes=k["n_axes"])
+        kept += one["mesh"] + one["factorisation"] + one["boundary"] + one["landscape"]
 
 
 def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):

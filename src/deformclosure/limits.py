@@ -196,7 +196,8 @@ MAX_BOUNDARY_NODES_PADS = 2_000
 #: Bytes per ``p²`` kept by one pads solver (condensed and gauged compliances), and the
 #: transient of building one: measured 167 and 95 (a solver of a 2000-vertex circle,
 #: 5 900 nodes: 0.67 GB kept, 1.05 GB at its peak; 165 and 100 at 1000 vertices; issue 25,
-#: earlier 215 and 55 with the previous condensation).
+#: earlier 215 and 55 with the previous condensation). The transient is gone once the
+#: solver is built: it is one of the estimate's transients (``condensing``), not kept.
 PADS_SOLVER_BYTES_PER_P2 = 170.0
 PADS_WORK_BYTES_PER_P2 = 100.0
 
@@ -727,7 +728,8 @@ def holding(nbytes: float) -> Iterator[None]:
 def kept_bytes(estimate: dict[str, float]) -> float:
     """What an analysis keeps after it ran, of its :func:`estimate_model_bytes`: its
     meshes, factorisations, boundary matrices and landscape curves (not the base, the
-    transients or what its callers hold)."""
+    transients — building the solvers, the elastic limit's fields — or what its callers
+    hold)."""
     return sum(estimate[k] for k in ("mesh", "factorisation", "boundary", "landscape"))
 
 
@@ -747,8 +749,8 @@ def _averaging_nonzeros(n_triangles: int, area: float, ell: float) -> float:
 
 def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_boundary: int,
                          n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
-                         solvers: int = 1, plan: bool = False, n_axes: int = 0
-                         ) -> dict[str, float]:
+                         solvers: int = 1, plan: bool = False, n_axes: int = 0,
+                         path_limit: bool = True) -> dict[str, float]:
     """Peak memory (bytes) of an analysis, by part, from the sizes of its mesh.
 
     Parameters
@@ -769,16 +771,20 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         Paper model: include the planner's strain responses of every jaw node.
     n_axes : int
         Pads: grasp axes whose contact curves the release landscape keeps.
+    path_limit : bool
+        Pads: the analysis evaluates the elastic limit along a squeeze path (the fields
+        of its breakpoints, the ``level`` term: optimize, plan). ``check`` averages the
+        strains of single placements only (the ``averaging`` term).
 
     Returns
     -------
     dict
         ``{"base", "held", "mesh", "factorisation", "boundary", "landscape", "graph",
-        "averaging", "level", "strains", "total"}`` (bytes). The total holds the base,
-        what enclosing steps hold (:func:`holding`), mesh, factorisation and boundary
-        matrices, plus the largest of the transients (graph construction, strain
-        responses, the averages, a pads level's elastic-limit fields), which come one
-        after another. The costs per unit are measured with
+        "averaging", "level", "strains", "condensing", "total"}`` (bytes). The total holds
+        the base, what enclosing steps hold (:func:`holding`), mesh, factorisation and
+        boundary matrices, plus the largest of the transients (graph construction, strain
+        responses, building a pads solver, the averages, a pads level's elastic-limit
+        fields), which come one after another. The costs per unit are measured with
         ``benchmarks/bench_memory.py`` (every command) and ``benchmarks/bench_limits.py``
         (at the maxima).
     """
@@ -786,7 +792,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
     q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
     out = {"base": BASE_BYTES, "held": math.fsum(_HELD), "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
            "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
-           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0}
+           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0,
+           "condensing": 0.0}
     if model == "paper":
         out["graph"] = PAPER_GRAPH_BYTES_PER_P2 * q * q
         if plan:
@@ -797,8 +804,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         out["factorisation"] *= k
         # a twin has fewer nodes, but not always a shorter boundary (a ring's vertices are
         # kept: a 2000-vertex circle's twin has 2000 boundary nodes too): whole solvers here
-        out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9)
-                           + PADS_WORK_BYTES_PER_P2) * p * p
+        out["boundary"] = PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9) * p * p
+        out["condensing"] = PADS_WORK_BYTES_PER_P2 * p * p
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
@@ -806,14 +813,15 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # breakpoints held at once: those the boundary predicts, at most a group's
         group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
         breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group)
-        out["level"] = AVERAGING_CHUNK_BYTES + (
+        out["level"] = 0.0 if not path_limit else AVERAGING_CHUNK_BYTES + (
             PADS_LEVEL_BYTES_PER_TRIANGLE
             + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
     # one after another: the largest of these transients adds to what stays.
-    transient = max(out["graph"], out["strains"], out["averaging"], out["level"])
+    transient = max(out["graph"], out["strains"], out["condensing"], out["averaging"],
+                    out["level"])
     out["total"] = (out["base"] + out["held"] + out["mesh"] + out["factorisation"]
                     + out["boundary"] + out["landscape"] + transient)
     return out
@@ -822,7 +830,7 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
 def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangles: int = 0,
                     n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
                     solvers: int = 1, plan: bool = True, n_axes: int = 0,
-                    what: str | None = None) -> dict[str, float]:
+                    path_limit: bool = True, what: str | None = None) -> dict[str, float]:
     """Refuse an analysis whose boundary or estimated memory exceeds the limits.
 
     Parameters
@@ -830,7 +838,7 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
     n_boundary : int
         Boundary nodes of the mesh (all loops).
     model : {"paper", "pads"}
-    n_nodes, n_triangles, n_jaw_nodes, area, ell, solvers, plan, n_axes
+    n_nodes, n_triangles, n_jaw_nodes, area, ell, solvers, plan, n_axes, path_limit
         See :func:`estimate_model_bytes`.
     what : str, optional
         What the messages start with (default ``--model <model>``).
@@ -872,7 +880,8 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
                              "material.critical_distance")
     est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
-                               solvers=solvers, plan=plan, n_axes=n_axes)
+                               solvers=solvers, plan=plan, n_axes=n_axes,
+                               path_limit=path_limit)
     if est["total"] > MEMORY_BUDGET:
         part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base", "held")),
                          key=lambda kv: kv[1])
