@@ -235,11 +235,21 @@ PADS_LIMIT_CHUNK_BYTES = 200e6
 #: 20 000 nodes (``benchmarks/bench_memory.py``).
 PLACEMENT_KERNEL_BYTES = 0.05 * GB
 
-#: Share of the grid's axes whose curves the release search of one pads ``optimize``
-#: level solves and keeps: measured 12-25 % (295-589 of 2400 axes, the notched bar held
-#: in its notches, every level of ``bench_memory.py``); counted a quarter. A plan solves
-#: every axis of its grid.
-PADS_SEARCH_AXES_FRACTION = 0.25
+#: Share of the coarse grid's axes whose curves the release search of one pads
+#: ``optimize`` level solves and keeps: measured 12.3-13.5 % (295-376 axes of the 48 × 50
+#: grid of optimize and the 72 × 40 of a plan's verification: the notched bar held in its
+#: notches, the first two levels at 1 800 to 20 600 nodes, ``bench_memory.py``); counted a
+#: fifth. A plan solves every axis of its grid. Deeper levels search the saddle patches
+#: too (:data:`PADS_SEARCH_PATCH_FRACTION`): the 589 of 2400 axes once counted here, and
+#: 449, 1 099 and 3 187 axes at levels 3 to 5 (issue 25).
+PADS_SEARCH_AXES_FRACTION = 0.2
+
+#: Share of the fine vertices of the saddle patches (``(2f + 1)²`` a patch, ``f = 2^k`` at
+#: level ``k + 1``, ``pads.saddle_grid``) that a refined level's release search solves
+#: beyond the coarse grid's: measured 0.61-0.69 (levels 3 to 5 of the notched bar to
+#: ``--rtol 0.005``, 1 800 to 13 300 nodes: 149 of 243, 799 of 1 156, 2 887 of 4 356, the
+#: coarse part taken as level 1's 300 axes); counted three quarters.
+PADS_SEARCH_PATCH_FRACTION = 0.75
 
 #: Largest number of element pairs of the critical-distance averages (pads model, SPEC §6):
 #: every element times the elements whose centroids lie within the critical distance ℓ

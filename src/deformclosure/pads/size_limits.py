@@ -16,9 +16,11 @@ from numbers import Integral
 from ..elasticity.critical_distance import critical_distance_of
 from ..errors import GraspError
 from ..mesh.generate import TWIN_AREA
-from ..limits import MAX_TRIANGLES, PADS_SEARCH_AXES_FRACTION, check_plan_size, format_count
+from ..limits import (MAX_TRIANGLES, PADS_SEARCH_AXES_FRACTION, PADS_SEARCH_PATCH_FRACTION,
+                      check_plan_size, format_count)
 
-__all__ = ["check_pads_size", "estimate_pads_bytes", "search_axes", "WITH_TWIN"]
+__all__ = ["check_pads_size", "estimate_pads_bytes", "level_axes", "search_axes",
+           "WITH_TWIN"]
 
 #: Solvers held by an analysis with its noise-floor twin, for :func:`check_pads_size`:
 #: the twin's mesh has ``1 / TWIN_AREA`` of the nodes (its triangles are larger), so the
@@ -31,6 +33,17 @@ def search_axes(n_angles: int, n_offsets: int) -> int:
     measured share :data:`~deformclosure.limits.PADS_SEARCH_AXES_FRACTION` of its grid
     (the release search stops at the escape; a plan solves the whole grid)."""
     return math.ceil(PADS_SEARCH_AXES_FRACTION * int(n_angles) * int(n_offsets))
+
+
+def level_axes(n_angles: int, n_offsets: int, k: int = 0, n_saddles: int = 0) -> int:
+    """Grasp axes whose curves level ``k + 1`` of an ``optimize`` run solves, for its memory
+    estimate: :func:`search_axes` of the coarse grid and, from the second level on, the
+    measured share :data:`~deformclosure.limits.PADS_SEARCH_PATCH_FRACTION` of the fine
+    vertices of its saddle patches (``(2f + 1)²`` each, ``f = 2^k``): one around each of
+    the ``n_saddles`` known saddles and one around the saddle a re-solve may add
+    (:func:`deformclosure.pads.refine.solve_level`)."""
+    patches = 0 if k <= 0 else (int(n_saddles) + 1) * (2 * 2 ** int(k) + 1) ** 2
+    return search_axes(n_angles, n_offsets) + math.ceil(PADS_SEARCH_PATCH_FRACTION * patches)
 
 
 def check_pads_size(mesh, *, solvers: float = 1, refine: int = 1, n_axes: int = 0,
