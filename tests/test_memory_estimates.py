@@ -95,15 +95,11 @@ def test_holding_refuses_what_would_not_fit_beside_it():
             limits.check_plan_size(150, "pads", n_nodes=2000, n_triangles=4000)
 
 
-def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
-    """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
-    level: its mesh's solver (one: its twin goes with the level) and the larger of the
-    curves its check counted and those it traced (counted here as the distinct axes the
-    landscapes of that mesh traced, over all its solves); recomputed from the sizes each
-    check was given."""
-    import deformclosure as dc
+def _record_checks_and_curves(monkeypatch, record):
+    """Record every pads size check (``record(args, kwargs, estimate)`` appended to the
+    first list) and the distinct axes whose curves the landscapes trace on each mesh (by
+    its node count; not the seeded start's): ``(seen, traced)``."""
     import deformclosure.pads.size_limits as psl
-    from deformclosure.pads import GraspAxis, Pad, pad_grasp
     from deformclosure.pads.landscape import Landscape
 
     seen, traced = [], {}
@@ -111,16 +107,29 @@ def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
 
     def recorded(*a, **k):
         est = orig(*a, **k)
-        seen.append((a[0], k, est))
+        seen.append(record(a, k, est))
         return est
 
-    def counted(self, v):          # a curve the landscape traces (not the seeded start's)
+    def counted(self, v):
         if v not in self._curves:
             traced.setdefault(self.solver.mesh.n_nodes, set()).add((id(self._known), v))
         return orig_curve(self, v)
 
     monkeypatch.setattr(psl, "check_plan_size", recorded)
     monkeypatch.setattr(Landscape, "curve", counted)
+    return seen, traced
+
+
+def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
+    """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
+    level: its mesh's solver (one: its twin goes with the level) and the larger of the
+    curves its check counted and those it traced (counted here as the distinct axes the
+    landscapes of that mesh traced, over all its solves); recomputed from the sizes each
+    check was given."""
+    import deformclosure as dc
+    from deformclosure.pads import GraspAxis, Pad, pad_grasp
+
+    seen, traced = _record_checks_and_curves(monkeypatch, lambda a, k, est: (a[0], k, est))
     axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
     res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.01, max_seconds=60,
                     n_angles=8, n_offsets=10, noise=False)
@@ -145,22 +154,8 @@ def test_refined_levels_solve_no_more_axes_than_their_estimates_count(monkeypatc
     import deformclosure as dc
     import deformclosure.pads.size_limits as psl
     from deformclosure.pads import GraspAxis, Pad, pad_grasp
-    from deformclosure.pads.landscape import Landscape
 
-    seen, traced = [], {}
-    orig, orig_curve = psl.check_plan_size, Landscape.curve
-
-    def recorded(*a, **k):
-        seen.append(k)
-        return orig(*a, **k)
-
-    def counted(self, v):
-        if v not in self._curves:
-            traced.setdefault(self.solver.mesh.n_nodes, set()).add((id(self._known), v))
-        return orig_curve(self, v)
-
-    monkeypatch.setattr(psl, "check_plan_size", recorded)
-    monkeypatch.setattr(Landscape, "curve", counted)
+    seen, traced = _record_checks_and_curves(monkeypatch, lambda a, k, est: k)
     axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
     res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.002, max_seconds=25,
                     noise=False)
