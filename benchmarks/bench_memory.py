@@ -15,27 +15,30 @@ meshed to about the given number of nodes (``--max-area``):
 The estimate is the largest total that the command's own size checks computed
 (:func:`deformclosure.limits.check_plan_size`, recorded in the child); the peak is the
 child's ``ru_maxrss`` (``os.wait4``), imports included. The table prints both, their
-ratio and whether the estimate bounds the peak within +30 % (target: ``1 <= est/peak <=
-1.3``; ``est/peak < 1`` would accept what may not fit, larger would refuse what fits).
+ratio and whether the estimate bounds the peak within +25 % (target: ``1 <= est/peak <=
+1.25``, issue 25; ``est/peak < 1`` would accept what may not fit, larger would refuse what fits).
 ``--phases`` also prints, per command, the resident memory at each logged step.
 ``--quick``: 2 500 and 5 000 nodes only.
 
-Measured (issue 25, after the refit and the elastic limit's groups; 2 cores shared, one
-BLAS thread; ``--nodes 2500 20000``):
+Measured (issue 25, after the refit, the elastic limit's groups, the condensing transient
+and the saddle patches; 2 cores shared, one BLAS thread; ``--nodes 2500 20000``):
 
     command                  nodes  est (GB)  peak (GB)  est/peak
-    optimize --refine 1      2,573     0.304      0.254      1.20
-    optimize --refine 1     20,015     0.824      0.676      1.22
-    optimize (rtol)          3,519     0.461      0.365      1.26
-    optimize (rtol)         20,621     1.377      0.956      1.44
-    plan --verify 1          3,656     0.655      0.478      1.37
-    plan --verify 1         20,637     2.079      1.499      1.39
-    check --refine 1         2,550     0.301      0.260      1.16
-    check --refine 1        19,939     0.715      0.541      1.32
+    optimize --refine 1      2,573     0.290      0.257      1.13
+    optimize --refine 1     20,015     0.773      0.679      1.14
+    optimize (rtol)          3,519     0.405      0.367      1.10
+    optimize (rtol)         20,621     1.117      0.965      1.16
+    plan --verify 1          3,656     0.589      0.477      1.23
+    plan --verify 1         20,637     1.780      1.458      1.22
+    check --refine 1         2,550     0.289      0.261      1.11
+    check --refine 1        19,939     0.579      0.543      1.06
 
-The estimate never fell below the peak; it is 16-44 % above it (the levels of an
-``--rtol`` run and a plan's verification count a quarter of their grid's curves and
-whole solvers for what they keep).
+The estimate never fell below the peak; it is 6-23 % above it (the sweep gave 16-44 %
+before the solver's build was counted as a transient, check stopped counting the path
+limit's fields and the levels counted one solver each). Deeper ``--rtol`` levels (beyond
+this sweep: the notched bar to ``--rtol 0.005``, levels 3-5 at 3 300-13 300 nodes) search
+the saddle patches: 449-3 187 axes, once estimated as 600 (level 5: 1.13 GB estimated,
+1.44 GB used); counted now (``size_limits.level_axes``), 2.06 GB estimated.
 
 Before the refit the same sweep gave est/peak 1.60-1.86 (optimize --refine 1), 0.69-0.89
 (plan: its verification's levels were checked as if the plan held nothing) and
@@ -160,7 +163,7 @@ def main() -> None:
         args.nodes = [n for n in args.nodes if n <= 5000] or [2500]
     folder = Path(tempfile.mkdtemp(prefix="bench_memory_"))
     print(f"{'command':<22} {'nodes':>7} {'est (GB)':>9} {'peak (GB)':>10} {'est/peak':>9} "
-          f"{'time (s)':>9}  within +30 %", flush=True)
+          f"{'time (s)':>9}  within +25 %", flush=True)
     all_met = True
     for name, (cmd, part, area, params) in commands(folder).items():
         if args.only and name not in args.only:
@@ -175,7 +178,7 @@ def main() -> None:
                 continue
             est = max((e["total"] for e in res["estimates"]), default=float("nan"))
             r = est / peak
-            ok = 1.0 <= r <= 1.3
+            ok = 1.0 <= r <= 1.25
             all_met &= ok
             print(f"{name:<22} {res['nodes']:>7,} {est / 1e9:>9.3f} {peak / 1e9:>10.3f} {r:>9.2f} "
                   f"{res['seconds']:>9.1f}  {'yes' if ok else 'NO'}", flush=True)
@@ -186,7 +189,7 @@ def main() -> None:
                     if k not in ("args", "n_nodes", "solvers", "n_axes", "total") and v), flush=True)
                 for msg, now, top in res["steps"]:
                     print(f"    {now:6.3f} GB (peak since last {top:6.3f})  {msg}", flush=True)
-    print(f"target (every estimate within +30 % above the measured peak): "
+    print(f"target (every estimate within +25 % above the measured peak): "
           f"{'met' if all_met else 'NOT met'}")
 
 

@@ -47,6 +47,19 @@ def _spd(rng, r):
     return A @ A.T + 0.3 * np.eye(r)
 
 
+def _two_bodies(rng, r):
+    """Two rigid bodies closing on a compliant part: ``(W, g0, b, e)`` with rows of A
+    (``e = 1``, ``b = 0``) then rows of B (``e = −1``, ``b = 1``), ``W`` SPD (m/N), gaps up
+    to 1 mm."""
+    nA = max(1, r // 2)
+    W = _spd(rng, r) * 1e-3
+    onB = np.arange(r) >= nA
+    e = np.where(onB, -1.0, 1.0)
+    b = np.where(onB, 1.0, 0.0)
+    g0 = rng.uniform(0.0, 1e-3, r)
+    return W, g0, b, e
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(1, 6), st.integers(0, 2**31 - 1))
 def test_pivoting_lcp_matches_brute_force(r, seed):
@@ -85,13 +98,7 @@ def test_squeeze_path_equals_the_solve_at_each_squeeze(r, seed):
     """``trace_contact`` (parametric active set) against ``solve_contact`` (dual QP) at
     squeezes along the path: two rigid bodies (rows of A: e > 0, b = 0; rows of B:
     e < 0, b > 0) closing on a compliant part."""
-    rng = np.random.default_rng(seed)
-    nA = max(1, r // 2)
-    W = _spd(rng, r) * 1e-3
-    onB = np.arange(r) >= nA
-    e = np.where(onB, -1.0, 1.0)
-    b = np.where(onB, 1.0, 0.0)
-    g0 = rng.uniform(0.0, 1e-3, r)
+    W, g0, b, e = _two_bodies(np.random.default_rng(seed), r)
     problem = ContactProblem(W, g0, balance=e[None, :], rate=b)
     path = trace_contact(problem, 5e-3, gap_tol=1e-15)
     for delta in np.linspace(path.delta[0], 5e-3, 9)[1:]:
@@ -173,14 +180,7 @@ def test_factored_squeeze_path_is_the_dense_one(r, seed):
     two-body problems."""
     from deformclosure.contact.path import _trace
 
-    rng = np.random.default_rng(seed)
-    nA = max(1, r // 2)
-    W = _spd(rng, r) * 1e-3
-    onB = np.arange(r) >= nA
-    e = np.where(onB, -1.0, 1.0)
-    b = np.where(onB, 1.0, 0.0)
-    g0 = rng.uniform(0.0, 1e-3, r)
-    args = (W, g0, b, e, 5e-3, 1e-15)
+    args = (*_two_bodies(np.random.default_rng(seed), r), 5e-3, 1e-15)
     _same_path(_trace(*args, 10000), _dense_trace(*args), 5e-3)
 
 

@@ -61,14 +61,14 @@ def peak_and_estimate(command: str, part: Path, params: dict) -> tuple[float, fl
     ("check", "rectangle.json", {"fingers": str(EXAMPLES / "fingers" / "rectangle.json"),
                                  "refine": 1, "max_area": 0.077}),
 ])
-def test_estimate_bounds_the_peak_within_30_percent(command, part, params):
-    """The estimate is at least the measured peak and at most 1.3 times it.
+def test_estimate_bounds_the_peak_within_25_percent(command, part, params):
+    """The estimate is at least the measured peak and at most 1.25 times it (issue 25).
 
     Measured on a second run: the first may compile the numba kernels (a cold cache on a
     fresh clone), and LLVM's compilation peaks near 2 GB, which is not the analysis's."""
     peak_and_estimate(command, EXAMPLES / part, params)
     peak, est = peak_and_estimate(command, EXAMPLES / part, params)
-    assert peak <= est <= 1.3 * peak, (peak / 1e9, est / 1e9)
+    assert peak <= est <= 1.25 * peak, (peak / 1e9, est / 1e9)
 
 
 def test_holding_adds_to_every_estimate_and_is_released():
@@ -95,31 +95,75 @@ def test_holding_refuses_what_would_not_fit_beside_it():
             limits.check_plan_size(150, "pads", n_nodes=2000, n_triangles=4000)
 
 
+def _record_checks_and_curves(monkeypatch, record):
+    """Record every pads size check (``record(args, kwargs, estimate)`` appended to the
+    first list) and the distinct axes whose curves the landscapes trace on each mesh (by
+    its node count; not the seeded start's): ``(seen, traced)``."""
+    import deformclosure.pads.size_limits as psl
+    from deformclosure.pads.landscape import Landscape
+
+    seen, traced = [], {}
+    orig, orig_curve = psl.check_plan_size, Landscape.curve
+
+    def recorded(*a, **k):
+        est = orig(*a, **k)
+        seen.append(record(a, k, est))
+        return est
+
+    def counted(self, v):
+        if v not in self._curves:
+            traced.setdefault(self.solver.mesh.n_nodes, set()).add((id(self._known), v))
+        return orig_curve(self, v)
+
+    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    monkeypatch.setattr(Landscape, "curve", counted)
+    return seen, traced
+
+
 def test_refinement_levels_count_the_levels_they_keep(monkeypatch):
     """Each level's size check of an ``--rtol`` run sees the kept bytes of every earlier
-    level (their solvers stay in the result), recomputed here from the recorded
-    estimates."""
+    level: its mesh's solver (one: its twin goes with the level) and the larger of the
+    curves its check counted and those it traced (counted here as the distinct axes the
+    landscapes of that mesh traced, over all its solves); recomputed from the sizes each
+    check was given."""
+    import deformclosure as dc
+    from deformclosure.pads import GraspAxis, Pad, pad_grasp
+
+    seen, traced = _record_checks_and_curves(monkeypatch, lambda a, k, est: (a[0], k, est))
+    axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
+    res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.01, max_seconds=60,
+                    n_angles=8, n_offsets=10, noise=False)
+    assert len(res.levels) >= 2 and len(seen) == len(res.levels)
+    kept = 0.0
+    for (n_b, k, est), level in zip(seen, res.levels):
+        assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
+        n_axes = len(traced[k["n_nodes"]])
+        assert n_axes >= level.n_axes - 1          # its solved axes but the start
+        one = limits.estimate_model_bytes(
+            "pads", n_boundary=n_b, n_nodes=k["n_nodes"], n_triangles=k["n_triangles"],
+            area=k["area"], ell=k["ell"], solvers=1, n_axes=max(n_axes, k["n_axes"]))
+        kept += one["mesh"] + one["factorisation"] + one["boundary"] + one["landscape"]
+
+
+@pytest.mark.slow
+def test_refined_levels_solve_no_more_axes_than_their_estimates_count(monkeypatch):
+    """The axes a level's release search solves (counted here, over all its solves) stay
+    within what its size check counted (:func:`~deformclosure.pads.size_limits.level_axes`:
+    a share of the coarse grid and of the saddle patches), also on the deeper levels whose
+    patches hold most of them (the notched bar held in its notches, to a tight rtol)."""
     import deformclosure as dc
     import deformclosure.pads.size_limits as psl
     from deformclosure.pads import GraspAxis, Pad, pad_grasp
 
-    seen = []
-    orig = psl.check_plan_size
-
-    def recorded(*a, **k):
-        est = orig(*a, **k)
-        seen.append(est)
-        return est
-
-    monkeypatch.setattr(psl, "check_plan_size", recorded)
+    seen, traced = _record_checks_and_curves(monkeypatch, lambda a, k, est: k)
     axis = GraspAxis.through([0.015, 0.0], [0.015, 0.012])
-    res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.01, max_seconds=60,
-                    n_angles=8, n_offsets=10, noise=False)
-    assert len(res.levels) >= 2 and len(seen) >= 2
-    kept = 0.0
-    for est in seen:
-        assert est["held"] == pytest.approx(kept, rel=1e-12, abs=1.0)
-        kept += limits.kept_bytes(est)
+    res = pad_grasp(dc.notched_part(2.0), axis, Pad(0.0, 0.002), rtol=0.002, max_seconds=25,
+                    noise=False)
+    assert len(res.levels) >= 3
+    for k, level in zip(seen, res.levels):
+        assert level.n_axes - 1 <= len(traced[k["n_nodes"]]) <= k["n_axes"]
+    # a deeper level searches beyond the coarse grid's share (in its patches)
+    assert max(len(t) for t in traced.values()) > psl.search_axes(48, 50)
 
 
 def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):

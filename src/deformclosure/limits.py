@@ -196,7 +196,8 @@ MAX_BOUNDARY_NODES_PADS = 2_000
 #: Bytes per ``p²`` kept by one pads solver (condensed and gauged compliances), and the
 #: transient of building one: measured 167 and 95 (a solver of a 2000-vertex circle,
 #: 5 900 nodes: 0.67 GB kept, 1.05 GB at its peak; 165 and 100 at 1000 vertices; issue 25,
-#: earlier 215 and 55 with the previous condensation).
+#: earlier 215 and 55 with the previous condensation). The transient is gone once the
+#: solver is built: it is one of the estimate's transients (``condensing``), not kept.
 PADS_SOLVER_BYTES_PER_P2 = 170.0
 PADS_WORK_BYTES_PER_P2 = 100.0
 
@@ -234,11 +235,21 @@ PADS_LIMIT_CHUNK_BYTES = 200e6
 #: 20 000 nodes (``benchmarks/bench_memory.py``).
 PLACEMENT_KERNEL_BYTES = 0.05 * GB
 
-#: Share of the grid's axes whose curves the release search of one pads ``optimize``
-#: level solves and keeps: measured 12-25 % (295-589 of 2400 axes, the notched bar held
-#: in its notches, every level of ``bench_memory.py``); counted a quarter. A plan solves
-#: every axis of its grid.
-PADS_SEARCH_AXES_FRACTION = 0.25
+#: Share of the coarse grid's axes whose curves the release search of one pads
+#: ``optimize`` level solves and keeps: measured 12.3-13.5 % (295-376 axes of the 48 × 50
+#: grid of optimize and the 72 × 40 of a plan's verification: the notched bar held in its
+#: notches, the first two levels at 1 800 to 20 600 nodes, ``bench_memory.py``); counted a
+#: fifth. A plan solves every axis of its grid. Deeper levels search the saddle patches
+#: too (:data:`PADS_SEARCH_PATCH_FRACTION`): the 589 of 2400 axes once counted here, and
+#: 449, 1 099 and 3 187 axes at levels 3 to 5 (issue 25).
+PADS_SEARCH_AXES_FRACTION = 0.2
+
+#: Share of the fine vertices of the saddle patches (``(2f + 1)²`` a patch, ``f = 2^k`` at
+#: level ``k + 1``, ``pads.saddle_grid``) that a refined level's release search solves
+#: beyond the coarse grid's: measured 0.61-0.69 (levels 3 to 5 of the notched bar to
+#: ``--rtol 0.005``, 1 800 to 13 300 nodes: 149 of 243, 799 of 1 156, 2 887 of 4 356, the
+#: coarse part taken as level 1's 300 axes); counted three quarters.
+PADS_SEARCH_PATCH_FRACTION = 0.75
 
 #: Largest number of element pairs of the critical-distance averages (pads model, SPEC §6):
 #: every element times the elements whose centroids lie within the critical distance ℓ
@@ -727,7 +738,8 @@ def holding(nbytes: float) -> Iterator[None]:
 def kept_bytes(estimate: dict[str, float]) -> float:
     """What an analysis keeps after it ran, of its :func:`estimate_model_bytes`: its
     meshes, factorisations, boundary matrices and landscape curves (not the base, the
-    transients or what its callers hold)."""
+    transients — building the solvers, the elastic limit's fields — or what its callers
+    hold)."""
     return sum(estimate[k] for k in ("mesh", "factorisation", "boundary", "landscape"))
 
 
@@ -747,8 +759,8 @@ def _averaging_nonzeros(n_triangles: int, area: float, ell: float) -> float:
 
 def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_boundary: int,
                          n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
-                         solvers: int = 1, plan: bool = False, n_axes: int = 0
-                         ) -> dict[str, float]:
+                         solvers: int = 1, plan: bool = False, n_axes: int = 0,
+                         path_limit: bool = True) -> dict[str, float]:
     """Peak memory (bytes) of an analysis, by part, from the sizes of its mesh.
 
     Parameters
@@ -769,16 +781,20 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         Paper model: include the planner's strain responses of every jaw node.
     n_axes : int
         Pads: grasp axes whose contact curves the release landscape keeps.
+    path_limit : bool
+        Pads: the analysis evaluates the elastic limit along a squeeze path (the fields
+        of its breakpoints, the ``level`` term: optimize, plan). ``check`` averages the
+        strains of single placements only (the ``averaging`` term).
 
     Returns
     -------
     dict
         ``{"base", "held", "mesh", "factorisation", "boundary", "landscape", "graph",
-        "averaging", "level", "strains", "total"}`` (bytes). The total holds the base,
-        what enclosing steps hold (:func:`holding`), mesh, factorisation and boundary
-        matrices, plus the largest of the transients (graph construction, strain
-        responses, the averages, a pads level's elastic-limit fields), which come one
-        after another. The costs per unit are measured with
+        "averaging", "level", "strains", "condensing", "total"}`` (bytes). The total holds
+        the base, what enclosing steps hold (:func:`holding`), mesh, factorisation and
+        boundary matrices, plus the largest of the transients (graph construction, strain
+        responses, building a pads solver, the averages, a pads level's elastic-limit
+        fields), which come one after another. The costs per unit are measured with
         ``benchmarks/bench_memory.py`` (every command) and ``benchmarks/bench_limits.py``
         (at the maxima).
     """
@@ -786,7 +802,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
     q = int(n_boundary if n_jaw_nodes is None else n_jaw_nodes)
     out = {"base": BASE_BYTES, "held": math.fsum(_HELD), "mesh": MESH_BYTES_PER_TRIANGLE * n_triangles,
            "factorisation": _factor_bytes(n_nodes), "boundary": CONDENSE_BYTES_PER_P2 * p * p,
-           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0}
+           "landscape": 0.0, "graph": 0.0, "averaging": 0.0, "level": 0.0, "strains": 0.0,
+           "condensing": 0.0}
     if model == "paper":
         out["graph"] = PAPER_GRAPH_BYTES_PER_P2 * q * q
         if plan:
@@ -797,8 +814,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         out["factorisation"] *= k
         # a twin has fewer nodes, but not always a shorter boundary (a ring's vertices are
         # kept: a 2000-vertex circle's twin has 2000 boundary nodes too): whole solvers here
-        out["boundary"] = (PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9)
-                           + PADS_WORK_BYTES_PER_P2) * p * p
+        out["boundary"] = PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9) * p * p
+        out["condensing"] = PADS_WORK_BYTES_PER_P2 * p * p
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
@@ -806,14 +823,15 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # breakpoints held at once: those the boundary predicts, at most a group's
         group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
         breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group)
-        out["level"] = AVERAGING_CHUNK_BYTES + (
+        out["level"] = 0.0 if not path_limit else AVERAGING_CHUNK_BYTES + (
             PADS_LEVEL_BYTES_PER_TRIANGLE
             + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
     else:
         choose(model, MODELS, "model", GraspError)
     # The contact graph is built, the strain responses and the averaging operator are used,
     # one after another: the largest of these transients adds to what stays.
-    transient = max(out["graph"], out["strains"], out["averaging"], out["level"])
+    transient = max(out["graph"], out["strains"], out["condensing"], out["averaging"],
+                    out["level"])
     out["total"] = (out["base"] + out["held"] + out["mesh"] + out["factorisation"]
                     + out["boundary"] + out["landscape"] + transient)
     return out
@@ -822,7 +840,7 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
 def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangles: int = 0,
                     n_jaw_nodes: int | None = None, area: float = 0.0, ell: float = 0.0,
                     solvers: int = 1, plan: bool = True, n_axes: int = 0,
-                    what: str | None = None) -> dict[str, float]:
+                    path_limit: bool = True, what: str | None = None) -> dict[str, float]:
     """Refuse an analysis whose boundary or estimated memory exceeds the limits.
 
     Parameters
@@ -830,7 +848,7 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
     n_boundary : int
         Boundary nodes of the mesh (all loops).
     model : {"paper", "pads"}
-    n_nodes, n_triangles, n_jaw_nodes, area, ell, solvers, plan, n_axes
+    n_nodes, n_triangles, n_jaw_nodes, area, ell, solvers, plan, n_axes, path_limit
         See :func:`estimate_model_bytes`.
     what : str, optional
         What the messages start with (default ``--model <model>``).
@@ -872,7 +890,8 @@ def check_plan_size(n_boundary: int, model: str, *, n_nodes: int = 0, n_triangle
                              "material.critical_distance")
     est = estimate_model_bytes(model, n_nodes=n_nodes, n_triangles=n_triangles,
                                n_boundary=n_boundary, n_jaw_nodes=n_jaw_nodes, area=area, ell=ell,
-                               solvers=solvers, plan=plan, n_axes=n_axes)
+                               solvers=solvers, plan=plan, n_axes=n_axes,
+                               path_limit=path_limit)
     if est["total"] > MEMORY_BUDGET:
         part, size = max(((k, v) for k, v in est.items() if k not in ("total", "base", "held")),
                          key=lambda kv: kv[1])

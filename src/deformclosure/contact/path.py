@@ -120,15 +120,9 @@ def _derivative_qp(Wj, bj, ej, zmask):  # pragma: no cover - compiled
             fixed[arg] = False
             continue
         sol = _equality_qp(Wj, bj, ej, F)
-        pmax, xmax = 0.0, 0.0
-        for a in range(nf):
-            pmax = max(pmax, abs(sol[a] - x[F[a]]))
-            xmax = max(xmax, abs(sol[a]))
-        if pmax <= tol * (1.0 + xmax) * 1e3:
+        if _take_if_stationary(x, sol, F, tol):
             # At the minimum on the working set: keep it, or free the worst active bound.
             mu = sol[nf]
-            for a in range(nf):
-                x[F[a]] = sol[a]
             arg = _most_negative(_bound_multipliers(Wj, bj, ej, x, mu, fixed), -1e-10 * bscale)
             if arg < 0:
                 return x, mu
@@ -177,6 +171,23 @@ def _bound_multipliers(Wj, bj, ej, x, mu, fixed):  # pragma: no cover - compiled
                 nu += Wj[i, c] * x[c]
             out[i] = nu
     return out
+
+
+@njit(cache=True, nogil=True)
+def _take_if_stationary(x, sol, F, tol):  # pragma: no cover - compiled
+    """Whether the working set's solution ``sol`` (the free entries, then μ) is the current
+    ``x`` on the free rows ``F`` to ``1e3 tol`` (relative): the active-set iteration is at
+    the minimum on its working set; then ``x_F`` takes it (in place)."""
+    nf = F.shape[0]
+    pmax, xmax = 0.0, 0.0
+    for a in range(nf):
+        pmax = max(pmax, abs(sol[a] - x[F[a]]))
+        xmax = max(xmax, abs(sol[a]))
+    if not pmax <= tol * (1.0 + xmax) * 1e3:      # (a NaN is not stationary)
+        return False
+    for a in range(nf):
+        x[F[a]] = sol[a]
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -367,14 +378,8 @@ def _factored_qp(Ws, b, e, J, zmask, fac):  # pragma: no cover - compiled
         for a in range(nf):
             sol[a] = raw[where[J[F[a]]]]
         sol[nf] = raw[sz]
-        pmax, xmax = 0.0, 0.0
-        for a in range(nf):
-            pmax = max(pmax, abs(sol[a] - x[F[a]]))
-            xmax = max(xmax, abs(sol[a]))
-        if pmax <= tol * (1.0 + xmax) * 1e3:
+        if _take_if_stationary(x, sol, F, tol):
             mu = sol[nf]
-            for a in range(nf):
-                x[F[a]] = sol[a]
             # multipliers of the active bounds, ν = W x + μ e − b (Wj = Ws[J, J])
             worst, arg = -1e-10 * bscale, -1
             for a in range(nj):

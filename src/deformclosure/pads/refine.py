@@ -357,17 +357,21 @@ def pad_grasp(part, axis: GraspAxis, pad: Pad, *, mesh=None, refine: int | None 
 
 
 def solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
-                 expanding_from, options: dict, most: int = 4) -> PadGraspResult:
+                 expanding_from, options: dict, most: int = 4,
+                 known: dict | None = None) -> PadGraspResult:
     """Level ``k``: the grasp on ``mesh`` (twin ``twin_m``), its landscape refined ``2^k``
     times around ``saddles`` (the earlier levels' saddles, to which this one's is added).
 
     Refining around a saddle can raise its pass (a coarse grid may cut a ridge between
     its vertices) so that the escape goes over another, still coarse pass; the level is
     solved again with that saddle refined too, until the escape's saddle lies in a
-    refined patch (at most ``most`` solves)."""
+    refined patch (at most ``most`` solves). ``known``, if given (empty), is filled with
+    the curves the level traced over all its solves: ``{grid factor: (mesh's curves by
+    vertex, twin's)}`` (:func:`traced_axes` counts them)."""
     tw = PadContact(twin_m) if twin_m is not None else None
     holes = {} if expanding_from is None else _holes(mesh, tw, expanding_from)
-    solver, known = None, {}     # one factorisation; curves traced once per grid spacing
+    solver = None                # one factorisation; curves traced once per grid spacing
+    known = {} if known is None else known
     for _ in range(most):
         refined = (2**k, list(saddles)) if k > 0 and saddles else None
         res = optimize_pads(mesh, axis, pad, solver=solver, twin=tw, saddles=refined,
@@ -384,6 +388,11 @@ def solve_level(mesh, twin_m, axis: GraspAxis, pad: Pad, k: int, saddles: list,
     return res
 
 
+def traced_axes(known: dict) -> int:
+    """Axes whose curves on the level's own mesh :func:`solve_level` traced (``known``)."""
+    return sum(len(curves) for curves, _ in known.values())
+
+
 def _log_level(t0: float, k: int, n: int, res: PadGraspResult) -> None:
     done("level %d of at most %d (%d nodes): Q* = %.6g J, %d grasp axes solved", t0,
          k + 1, n, res.n_nodes, res.quality, res.n_axes)
@@ -394,7 +403,7 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
              options: dict) -> RefinedPadGrasp:
     """Levels until the estimates of Q* and U_A are within ``rtol`` (module docstring)."""
     from ..limits import holding, kept_bytes
-    from .size_limits import WITH_TWIN, check_pads_size, search_axes
+    from .size_limits import WITH_TWIN, check_pads_size, estimate_pads_bytes, level_axes
 
     t_start = time.perf_counter()
     base = float(max_area) if max_area is not None else default_max_area(part)
@@ -407,24 +416,32 @@ def _to_rtol(part, axis: GraspAxis, pad: Pad, rtol: float, adaptive: bool,
     levels, areas, seconds, saddles = [], [], [], []
     stopped = None
     held = 0.0          # the solvers and curves of the levels so far, which the run keeps
-    n_axes = search_axes(options.get("n_angles", 48), options.get("n_offsets", 50))
+    grid = (options.get("n_angles", 48), options.get("n_offsets", 50))
     for k in range(MAX_LEVELS):
         if progress is not None:
             progress(k, MAX_LEVELS)
         t0 = time.perf_counter()
         try:
             mesh = mesh_part(part, max_area=sizing.default, sizing=sizing)
+            n_axes = level_axes(*grid, k, len(saddles))
             with holding(held):
-                est = check_pads_size(mesh, solvers=WITH_TWIN if twin else 1, refine=1,
-                                      n_axes=n_axes)
-            held += kept_bytes(est)
+                check_pads_size(mesh, solvers=WITH_TWIN if twin else 1, refine=1,
+                                n_axes=n_axes)
         except DeformClosureError as err:
             if not levels:
                 raise
             stopped = f"memory or size limit at level {k + 1}: {err}"
             break
         tw = twin_mesh(part, max_area=sizing.default, sizing=sizing) if twin else None
-        levels.append(solve_level(mesh, tw, axis, pad, k, saddles, expanding_from, options))
+        known: dict = {}
+        levels.append(solve_level(mesh, tw, axis, pad, k, saddles, expanding_from, options,
+                                  known=known))
+        # the run keeps the level's solver; the curves the level traced are freed but the
+        # heap they took stays resident (the larger of their number and the estimate's:
+        # the latter also covers the path kernels loaded at the first curve); its twin
+        # goes with the level (measured: benchmarks/bench_memory.py)
+        held += kept_bytes(estimate_pads_bytes(mesh, solvers=1,
+                                               n_axes=max(n_axes, traced_axes(known))))
         areas.append(float(mesh.areas.max()))
         seconds.append(time.perf_counter() - t0)
         _log_level(t0, k, MAX_LEVELS, levels[-1])

@@ -16,9 +16,11 @@ from numbers import Integral
 from ..elasticity.critical_distance import critical_distance_of
 from ..errors import GraspError
 from ..mesh.generate import TWIN_AREA
-from ..limits import MAX_TRIANGLES, PADS_SEARCH_AXES_FRACTION, check_plan_size, format_count
+from ..limits import (MAX_TRIANGLES, PADS_SEARCH_AXES_FRACTION, PADS_SEARCH_PATCH_FRACTION,
+                      check_plan_size, format_count)
 
-__all__ = ["check_pads_size", "search_axes", "WITH_TWIN"]
+__all__ = ["check_pads_size", "estimate_pads_bytes", "level_axes", "search_axes",
+           "WITH_TWIN"]
 
 #: Solvers held by an analysis with its noise-floor twin, for :func:`check_pads_size`:
 #: the twin's mesh has ``1 / TWIN_AREA`` of the nodes (its triangles are larger), so the
@@ -33,8 +35,19 @@ def search_axes(n_angles: int, n_offsets: int) -> int:
     return math.ceil(PADS_SEARCH_AXES_FRACTION * int(n_angles) * int(n_offsets))
 
 
-def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
-                    what: str | None = None) -> dict[str, float]:
+def level_axes(n_angles: int, n_offsets: int, k: int = 0, n_saddles: int = 0) -> int:
+    """Grasp axes whose curves level ``k + 1`` of an ``optimize`` run solves, for its memory
+    estimate: :func:`search_axes` of the coarse grid and, from the second level on, the
+    measured share :data:`~deformclosure.limits.PADS_SEARCH_PATCH_FRACTION` of the fine
+    vertices of its saddle patches (``(2f + 1)²`` each, ``f = 2^k``): one around each of
+    the ``n_saddles`` known saddles and one around the saddle a re-solve may add
+    (:func:`deformclosure.pads.refine.solve_level`)."""
+    patches = 0 if k <= 0 else (int(n_saddles) + 1) * (2 * 2 ** int(k) + 1) ** 2
+    return search_axes(n_angles, n_offsets) + math.ceil(PADS_SEARCH_PATCH_FRACTION * patches)
+
+
+def check_pads_size(mesh, *, solvers: float = 1, refine: int = 1, n_axes: int = 0,
+                    path_limit: bool = True, what: str | None = None) -> dict[str, float]:
     """Refuse a pads analysis of ``mesh`` that exceeds the limits.
 
     Parameters
@@ -52,6 +65,10 @@ def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
     n_axes : int
         Grasp axes of the release landscape (a plan's grid; an optimize evaluates part
         of its grid).
+    path_limit : bool
+        The elastic limit is evaluated along squeeze paths (optimize, plan); ``check``
+        averages single placements' strains only. See
+        :func:`deformclosure.limits.estimate_model_bytes`.
     what : str, optional
         What the messages start with (default ``--model pads``).
 
@@ -68,15 +85,33 @@ def check_pads_size(mesh, *, solvers: int = 1, refine: int = 1, n_axes: int = 0,
         ``refine``) :data:`~deformclosure.limits.MAX_TRIANGLES` on the finest mesh.
     """
     levels = int(refine) if isinstance(refine, Integral) and 1 <= refine <= 5 else 1
-    f, g = 4 ** (levels - 1), 2 ** (levels - 1)
-    if levels > 1 and mesh.n_triangles * f > MAX_TRIANGLES:
+    if levels > 1 and mesh.n_triangles * 4 ** (levels - 1) > MAX_TRIANGLES:
         raise GraspError(f"--refine {levels}: the finest mesh would have about "
-                         f"{format_count(mesh.n_triangles * f)} triangles (limit "
-                         f"{MAX_TRIANGLES:,}); use fewer meshes or a larger mesh.max_area")
-    n_b = sum(len(lp) for lp in mesh.loops) * g
+                         f"{format_count(mesh.n_triangles * 4 ** (levels - 1))} triangles "
+                         f"(limit {MAX_TRIANGLES:,}); use fewer meshes or a larger "
+                         "mesh.max_area")
+    sizes = _sizes(mesh, solvers, levels)
+    return check_plan_size(sizes.pop("n_boundary"), "pads", **sizes, plan=False,
+                           n_axes=n_axes, path_limit=path_limit, what=what)
+
+
+def estimate_pads_bytes(mesh, *, solvers: float = 1, refine: int = 1, n_axes: int = 0,
+                        path_limit: bool = True) -> dict[str, float]:
+    """The estimate of :func:`check_pads_size` without its checks (bytes), e.g. of what a
+    finished step keeps (:func:`deformclosure.limits.kept_bytes`) with fewer solvers
+    than it held while it ran."""
+    from ..limits import estimate_model_bytes
+
+    return estimate_model_bytes("pads", **_sizes(mesh, solvers, max(int(refine), 1)),
+                                n_axes=n_axes, path_limit=path_limit)
+
+
+def _sizes(mesh, solvers: float, levels: int) -> dict:
+    """The sizes :func:`deformclosure.limits.estimate_model_bytes` reads, of the finest of
+    ``levels`` meshes starting at ``mesh``."""
+    f, g = 4 ** (levels - 1), 2 ** (levels - 1)
     # --refine keeps every level's solvers: about 4/3 of the finest mesh's
     k = solvers * (4.0 / 3.0 if levels > 1 else 1.0)
-    return check_plan_size(n_b, "pads", n_nodes=mesh.n_nodes * f,
-                           n_triangles=mesh.n_triangles * f, area=float(mesh.areas.sum()),
-                           ell=critical_distance_of(mesh), solvers=k, plan=False,
-                           n_axes=n_axes, what=what)
+    return {"n_boundary": sum(len(lp) for lp in mesh.loops) * g, "n_nodes": mesh.n_nodes * f,
+            "n_triangles": mesh.n_triangles * f, "area": float(mesh.areas.sum()),
+            "ell": critical_distance_of(mesh), "solvers": k}

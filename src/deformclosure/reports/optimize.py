@@ -71,13 +71,15 @@ def _axis_start(at, axis, scale: float):
 
 def _pads(part, p: dict, notify) -> Report:
     from ..pads import pad_grasp
-    from ..pads.size_limits import WITH_TWIN, check_pads_size, search_axes
+    from ..pads.size_limits import WITH_TWIN, check_pads_size, level_axes
 
     check_grid(p["grid_angles"], p["grid_offsets"])
     inp = read_inputs(part, p["units"], p["material"], max_area=p["max_area"])
     rtol, refine, warnings = accuracy_request(p, inp.part is None)
+    # --refine N: the finest level's curves, its saddle patches one per earlier level
+    last = (refine or 1) - 1
     check_pads_size(inp.mesh, solvers=1 if inp.part is None else WITH_TWIN, refine=refine or 1,
-                    n_axes=search_axes(p["grid_angles"], p["grid_offsets"]))
+                    n_axes=level_axes(p["grid_angles"], p["grid_offsets"], last, last))
     scale = inp.scale
     ax = parse_axis(p["at"], p["axis"], scale)
     pad = pad_from_options(p["pad_radius"], p["pad_width"], scale, inp.mesh.diameter)
