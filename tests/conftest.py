@@ -61,7 +61,7 @@ SLOW_PARAMS = {
 def pytest_configure(config):
     config.addinivalue_line(
         "markers", "late: run after all other tests (e.g. they read results of subprocesses "
-        "started in the background at collection)")
+        "started in the background when collection ends)")
 
 
 @pytest.hookimpl(tryfirst=True)         # before -m/-k deselect, which read the marks
@@ -80,6 +80,18 @@ def pytest_collection_modifyitems(config, items):
                                            f"not exist (renamed?): {sorted(stale)}"))
     # Stable sort: order is kept within the early and the late groups.
     items.sort(key=lambda item: item.get_closest_marker("late") is not None)
+
+
+def pytest_collection_finish(session):
+    """Start the background work of each module with a selected ``late`` test (its
+    ``start_background_runs()``), after -m/-k deselection: while the rest of the run goes
+    on, and not at all in a run that leaves those tests out."""
+    modules = {item.module for item in session.items
+               if item.get_closest_marker("late") and getattr(item, "module", None)}
+    for module in modules:
+        start = getattr(module, "start_background_runs", None)
+        if start is not None:
+            start()
 
 
 @pytest.fixture(scope="session")

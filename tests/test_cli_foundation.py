@@ -124,7 +124,7 @@ def _script() -> list[str]:
 
 
 def _start_background_runs():
-    """Start every subprocess of this module now, at collection, two at a time.
+    """Start every subprocess of this module, two at a time, in the background.
 
     Interpreter start-up (about 1 s each) dominates these checks; running them in the
     background while the rest of the suite runs keeps the suite fast. The tests that
@@ -155,14 +155,24 @@ def _start_background_runs():
     return tmp, futures
 
 
-_TMP, _FUTURES = _start_background_runs()
+#: ``{"tmp": folder, "futures": {name: future}}`` once :func:`start_background_runs` ran.
+_BACKGROUND: dict = {}
+
+
+def start_background_runs() -> None:
+    """Start the background subprocesses once; called by conftest at the end of
+    collection when a ``late`` test of this module is selected. A run that deselects them
+    all (``-m slow``) starts none: they cost ~30 s of CPU that no test would read."""
+    if not _BACKGROUND:
+        _BACKGROUND["tmp"], _BACKGROUND["futures"] = _start_background_runs()
 
 
 @pytest.fixture(scope="module")
 def runs():
     """Results of the background subprocesses (waits for them)."""
-    results = {k: f.result() for k, f in _FUTURES.items()}
-    results["tmp"] = _TMP
+    start_background_runs()                     # already started unless a plugin skipped it
+    results = {k: f.result() for k, f in _BACKGROUND["futures"].items()}
+    results["tmp"] = _BACKGROUND["tmp"]
     return results
 
 
