@@ -41,7 +41,6 @@ row slides, the entry equals ``slide``; ``"geometry"``: load carried beyond that
 from __future__ import annotations
 
 import dataclasses
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -336,9 +335,9 @@ class FrictionalCurve:
         load; :meth:`hold`): before gross slip (``inf`` if none), where every contact row
         first slides (friction exhausted; ``≤`` the first), and what limits it:
         ``"friction"`` (gross slip as the last row slides), ``"dynamic"`` (the
-        quasi-static path ends, no consistent stick/slip rate, before every row slides), ``"geometry"`` (the part
-        carries load after every row slides, or for ever: wedged on the pads' curvature or
-        jammed), ``"budget"`` (``deadline`` passed: both ``nan``) or ``"unbalanced"``
+        quasi-static path ends, no consistent stick/slip rate, before every row slides),
+        ``"geometry"`` (the part carries load after every row slides, or for ever: wedged
+        on the pads' curvature or jammed), ``"budget"`` (``deadline`` passed: both ``nan``) or ``"unbalanced"``
         (the part is not held at zero load: both 0)."""
         lp, st, ended = self._released(sigma, deadline) if released is None else released
         if ended == "unbalanced":
@@ -381,8 +380,8 @@ class FrictionalCurve:
         contact row first slides (the friction is exhausted); ``limited_by`` per entry:
         ``"friction"`` (gross slip: the entry equals ``slide``; for flat pads),
         ``"dynamic"`` (the quasi-static path ends there, before every row slides),
-        ``"geometry"`` (wedged on the pads' curvature or jammed: the linear kinematics carries load beyond ``slide``, up
-        to the entry, ``±inf`` if for ever — that resistance is geometric, its strength the
+        ``"geometry"`` (wedged on the pads' curvature or jammed: the linear kinematics
+        carries load beyond ``slide``, up to the entry, ``±inf`` if for ever — that resistance is geometric, its strength the
         release landscape's question, SPEC §6, §9), ``"unbalanced"`` (the squeeze's
         resultant cannot be carried once the gauge is released: 0, not held at zero load)
         or ``"budget"`` (``deadline``, a ``time.perf_counter()`` value, passed first:
@@ -395,17 +394,12 @@ class FrictionalCurve:
                "slide": {"force": [0.0, 0.0], "torque": [0.0, 0.0]},
                "limited_by": {"force": ["", ""], "torque": ["", ""]},
                "gauge_reaction": {"force": F0 + 0.0, "torque": M0 + 0.0}, "stopped": None}
-        released = None
-        if deadline is not None and time.perf_counter() > deadline:
-            released = (None, None, "budget")
-        else:
-            released = self._released(sigma, deadline)
+        # every trace checks the deadline before its first piece: a passed deadline makes
+        # the release and each loading "budget" at once
+        released = self._released(sigma, deadline)
         for key2, j, d in (("force", 0, [-1.0, 0.0]), ("force", 1, [1.0, 0.0]),
                            ("torque", 0, [0.0, -1.0]), ("torque", 1, [0.0, 1.0])):
-            if released[2] is None and deadline is not None and time.perf_counter() > deadline:
-                lim, sl, kind = float("nan"), float("nan"), "budget"
-            else:
-                lim, sl, kind = self.hold_limit(sigma, d, deadline=deadline, released=released)
+            lim, sl, kind = self.hold_limit(sigma, d, deadline=deadline, released=released)
             sign = -1.0 if j == 0 else 1.0
             out[key2][j] = sign * lim + 0.0
             out["slide"][key2][j] = sign * sl + 0.0
