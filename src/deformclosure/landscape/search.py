@@ -103,7 +103,8 @@ def minimax_escape(start: V, neighbours: Callable[[V], Iterable[V]],
     * ``goal`` (when given; then nothing else ends it), else, for ``v ≠ start``,
     * a release: ``is_release(v, U(v))``;
     * another equilibrium: with ``noise=None`` (SPEC §4) when no neighbour is lower,
-      ``U(v) ≤ U(w)`` for all neighbours ``w``; with a relative floor ``noise = τ``
+      ``U(v) ≤ U(w)`` for all neighbours ``w``, and ``confirm(v)`` (when given) agrees;
+      with a relative floor ``noise = τ``
       (:mod:`.noise`) when the barrier to it is beyond the floor
       (``resolved(cost − U(start), cost, τ)``), every neighbour is higher beyond it
       (``higher(U(w), U(v), max(τ, ROUND_OFF))``) and ``confirm(v)`` (when given) agrees.
@@ -131,7 +132,8 @@ def minimax_escape(start: V, neighbours: Callable[[V], Iterable[V]],
         Relative noise floor ``τ`` of the equilibrium test (above); ``None``: the exact
         test of SPEC §4.
     confirm : callable, optional
-        ``confirm(v)``: a last, possibly costly, test of an equilibrium found with a floor.
+        ``confirm(v)``: a last, possibly costly, test of an equilibrium (e.g. against
+        neighbours the search does not expand into, a sub-landscape's cut-off ones).
     stop_above : float, optional
         Stop (``complete`` False) once the cost above the start's energy exceeds this (J).
     max_evaluations : int, optional
@@ -205,7 +207,7 @@ def minimax_escape(start: V, neighbours: Callable[[V], Iterable[V]],
             if is_release is not None and is_release(v, Ev):
                 return finish(b, v, "released", True)
             if noise is None:
-                eq = not Ew or Ev <= min(Ew)
+                eq = (not Ew or Ev <= min(Ew)) and (confirm is None or confirm(v))
             else:
                 eq = (resolved(b - Es, b, tau) and all(higher(e, Ev, tol) for e in Ew)
                       and (confirm is None or confirm(v)))

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -27,12 +27,21 @@ from .landscape import Landscape
 from .large_deformation import FiniteStrainCurve, FiniteStrainPads
 from .refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, RefinedPadGrasp
 
-__all__ = ["FiniteStrainResult", "RestrictedGrid", "optimize_finite_strain", "finite_strain_levels",
+__all__ = ["FiniteStrainResult", "RestrictedGrid", "grown_release", "optimize_finite_strain", "finite_strain_levels",
            "FiniteStrainRefinement",
            "UPPER_BOUND_NOTE"]
 
 #: σ samples of the first pass of the σ*-search.
 N_SAMPLES = 8
+
+#: The σ*-search's bracket stops at this fraction of ``rtol·σ0``.
+X_TOL = 0.1
+
+#: The sub-landscape may grow to this many times its first size (:class:`RestrictedGrid`).
+#: 1 (no growth) by default: measured on the demo's notched bar (3 118 nodes), growing the
+#: 35-axis sub-landscape to 70 axes cost ~60 s more and still found no finite-strain
+#: escape below U_L, so Q (= U_L there) did not change (docs/large_deformation.md).
+GROWTH_FACTOR = 1
 
 UPPER_BOUND_NOTE = ("U_A at finite strain is the barrier on the linear model's escape path "
                     "and its grid neighbours re-solved: an upper bound on the finite-strain "
@@ -41,10 +50,31 @@ UPPER_BOUND_NOTE = ("U_A at finite strain is the barrier on the linear model's e
 
 class RestrictedGrid:
     """An axis grid whose neighbours are limited to the vertices ``allowed`` (the
-    sub-landscape the finite-strain model re-solves)."""
+    sub-landscape the finite-strain model re-solves), grown on demand.
 
-    def __init__(self, grid, allowed: set[int]) -> None:
+    The linear escape path ends at the linear model's "other equilibrium"; at finite
+    strain that vertex need not be one (on the notched bar's uniform section the energies
+    along the bar are ties to the linear model, rising by 6e-4 relative at finite strain),
+    and the restricted search can then run out of vertices without reaching an
+    equilibrium: ``U_A = ∞`` on the sub-landscape only. :meth:`grow` then opens the grid
+    one vertex at a time where the cheapest continuation is likely: the neighbour of a
+    settled vertex that the linear model (cheap, solved on the same grid) finds lowest. The search expands only into ``allowed`` but tests
+    an equilibrium against every grid neighbour (:meth:`full_neighbours`), so its path is
+    a path of the full grid to an equilibrium of the full grid, and its barrier an upper
+    bound on the full landscape's (SPEC §8).
+
+    Parameters
+    ----------
+    grid : AxisGrid
+    allowed : set of int
+    most : int, optional
+        Largest size of ``allowed`` :meth:`grow` may reach (default: the grid's size).
+    """
+
+    def __init__(self, grid, allowed: set[int], most: int | None = None) -> None:
         self.grid, self.allowed = grid, set(allowed)
+        self.most = grid.size if most is None else int(most)
+        self.n_grown = 0
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.grid, name)
@@ -54,6 +84,28 @@ class RestrictedGrid:
 
     def start_neighbours(self, v: int) -> list[int]:
         return self.grid.start_neighbours(v)
+
+    def full_neighbours(self, v: int) -> list[int]:
+        """The full grid's neighbours: an equilibrium of the sub-landscape must be one of
+        the full grid (:meth:`Landscape.release` confirms it against them)."""
+        return self.grid.neighbours(v)
+
+    def grow(self, settled: list[int], proxy: Callable[[int], float]) -> bool:
+        """Open one vertex outside ``allowed``: a grid neighbour of the latest vertex of
+        ``settled`` (the search's settled set, in the order it settled them: the last is
+        the highest it climbed) that has one, the neighbour ``proxy`` (an energy estimate,
+        J: the linear model's at the same separation) ranks lowest. False when there is
+        none or ``allowed`` has reached ``most``."""
+        if len(self.allowed) >= self.most:
+            return False
+        for v in reversed(settled):
+            cut = [w for w in self.grid.neighbours(v) if w not in self.allowed]
+            if cut:
+                w = min(cut, key=lambda x: (proxy(x), x))
+                self.allowed.add(w)
+                self.n_grown += 1
+                return True
+        return False
 
 
 @dataclass(frozen=True, eq=False)
@@ -255,6 +307,23 @@ class FiniteStrainResult:
         return out
 
 
+def grown_release(land: Landscape, sub: RestrictedGrid, start: int, sigma: float,
+                  noise: float, proxy: Callable[[int, float], float],
+                  cap: float | None = None, deadline: float | None = None):
+    """:meth:`Landscape.release` of ``start`` at ``sigma`` (m) on the sub-landscape
+    ``sub`` (the grid of ``land``), grown while its search runs out of vertices before an
+    equilibrium (:meth:`RestrictedGrid.grow` by ``proxy(v, sigma)``, J); raises
+    :class:`_OutOfTime` past ``deadline`` (a ``time.perf_counter()`` value)."""
+    rel = land.release(start, sigma, noise, cap)
+    while (rel.strict and not rel.bounded and math.isinf(rel.U_A)
+           and sub.grow(land.last_escape.settled, lambda v: proxy(v, sigma))):
+        if deadline is not None and time.perf_counter() > deadline:
+            raise _OutOfTime
+        land.grid_changed()
+        rel = land.release(start, sigma, noise, cap)
+    return rel
+
+
 def _allowed(grid, start: int, path: list[int]) -> set[int]:
     """The start, the path's vertices and every grid neighbour of them."""
     out = {start, *path}
@@ -310,10 +379,25 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
     sigma_L, sigma0 = lim.sigma_L, start.sigma0
     U_sL = start.energy_at(sigma_L)
     allowed = _allowed(grid, s, list(linear.escape_vertices))
-    land = Landscape(fs, pad, RestrictedGrid(grid, allowed), sigma_L)     # type: ignore[arg-type]
+    sub = RestrictedGrid(grid, allowed, most=GROWTH_FACTOR * len(allowed))
+    land = Landscape(fs, pad, sub, sigma_L)                    # type: ignore[arg-type]
     land.seed(s, start)
     tau = float(linear.noise_relative)
     evals: dict[float, tuple] = {}
+
+    linear_curves: dict[int, Any] = {}
+
+    def linear_energy(v: int, sig: float) -> float:
+        """The linear model's energy (J) of vertex ``v`` at ``sig`` (m): the proxy that
+        steers the sub-landscape's growth."""
+        c = linear_curves.get(v)
+        if c is None:
+            c = linear_curves[v] = linear.solver.curve(grid.axis(v), pad, sigma_L)
+        return float(c.energy_at(sig))
+
+    def release(sig: float, cap: float | None = None, timed: bool = True):
+        return grown_release(land, sub, s, sig, tau, linear_energy, cap,
+                             deadline if timed else None)
 
     def evaluate(sig: float) -> float:
         r = evals.get(sig)
@@ -324,7 +408,7 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
             # Q = min(U_A, U_L): the search need not climb above U_L (it stops there, and
             # the release is then a lower bound of U_A, Landscape.release's ``cap``)
             cap = UL if math.isfinite(UL) and UL > 0 else None
-            rel = land.release(s, sig, tau, cap)
+            rel = release(sig, cap)
             r = evals[sig] = (rel, UL, min(rel.U_A, UL))
         return r[2]
 
@@ -334,17 +418,21 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
 
     stopped = None
     try:
-        best = maximise_sampled(evaluate, sigma_L, sigma0, n_samples, rtol, 1e-4 * sigma0, U_L)
+        # σ* to ``rtol``: Q jumps where the sub-landscape's set of equilibria changes
+        # (SPEC §4), and a jump is never narrowed to a slope, so the bracket stops at
+        # X_TOL·rtol·σ0 (the σ-error of the answer, which the level differences measure)
+        best = maximise_sampled(evaluate, sigma_L, sigma0, n_samples, rtol,
+                                X_TOL * rtol * sigma0, U_L)
     except _OutOfTime:
         stopped = "time budget"
         ranked = sorted(((r[2], x) for x, r in evals.items()), reverse=True)
         best = ranked[0] if ranked and ranked[0][0] > 0 else None
     sigma_star = None if best is None else best[1]
     sig_e = sigma0 if sigma_star is None else sigma_star
-    rel, UL, Q = evals[sig_e] if sig_e in evals else (land.release(s, sig_e, tau), 0.0, 0.0)
+    rel, UL, Q = evals[sig_e] if sig_e in evals else (release(sig_e, timed=False), 0.0, 0.0)
     if rel.bounded:
         # σ*'s own barrier and escape path (the σ-search only needed U_A > U_L there)
-        rel = land.release(s, sig_e, tau)
+        rel = release(sig_e, timed=False)
     barrier = rel.strict and math.isfinite(rel.U_A) and sigma_star is not None
     path = [grid.axis(v) for v in rel.path] if barrier else []
     force = stiffness = strain = None

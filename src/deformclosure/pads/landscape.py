@@ -195,6 +195,8 @@ class Landscape:
         self._energy_at: dict[int, object] = {}
         self._releases: dict[tuple, Release] = {}
         self._noise: dict[tuple, float] = {}
+        #: The :class:`~deformclosure.landscape.search.Escape` of the last search run.
+        self.last_escape = None
 
     def measure_noise(self, most: int = 48) -> bool:
         """Solve axes visited so far on the twin realisation, at most ``most`` in all
@@ -271,6 +273,13 @@ class Landscape:
             self._energy_at[v] = f
         return f(sigma)
 
+    def grid_changed(self) -> None:
+        """Forget the cached neighbours and releases after the grid's neighbours changed
+        (a grown sub-landscape, :class:`~deformclosure.pads.finite_strain_grasp.
+        RestrictedGrid`); the solved curves stay."""
+        self._nbrs.clear()
+        self._releases.clear()
+
     def neighbours(self, v: int) -> list[int]:
         """Grid neighbours of vertex ``v`` (:meth:`AxisGrid.neighbours`, cached)."""
         out = self._nbrs.get(v)
@@ -313,7 +322,12 @@ class Landscape:
         if Us <= 0.0 or not all(higher(U(w), Us, noise) for w in g.start_neighbours(start)):
             # Nothing squeezed (a released placement), or a neighbour within the noise.
             return Release(0.0, False, None, [])
-        esc = minimax_escape(start, nbrs, U, stop_above=cap)   # SPEC §4's exact test
+        # A sub-landscape (``grid.full_neighbours``) confirms an equilibrium against the
+        # neighbours it does not expand into: its target is then one of the full grid.
+        full = getattr(g, "full_neighbours", None)
+        confirm = None if full is None else (lambda v: all(U(v) <= U(w, v) for w in full(v)))
+        esc = self.last_escape = minimax_escape(start, nbrs, U, stop_above=cap,  # SPEC §4
+                                                confirm=confirm)
         if not esc.complete:
             return Release(esc.barrier - Us, True, None, [], bounded=True)
         if esc.target is None:
