@@ -27,6 +27,7 @@ QUICK = {
     "bench_fem.py": ["--sizes", "1000", "--repeat", "1"],
     "bench_friction.py": ["--smoke"],
     "bench_large_deformation.py": ["--smoke"],
+    "bench_neohookean.py": ["--quick"],
     "bench_kkt_solvers.py": ["--smoke"],
     "linear_model_error.py": ["--smoke"],
     "bench_grasp.py": ["--quick"],

@@ -46,6 +46,11 @@ class LinearEnergy:
         """Internal force ``K u`` (N)."""
         return self.K @ u
 
+    def energy_gradient(self, u: np.ndarray) -> tuple[float, np.ndarray]:
+        """Energy (J) and internal force (N) at ``u`` (m)."""
+        f = self.K @ u
+        return 0.5 * float(u @ f), f
+
     def tangent(self, u: np.ndarray) -> sp.csr_matrix:
         """Stiffness ``K`` (N/m)."""
         return self.K
