@@ -137,3 +137,71 @@ def test_growth_opens_the_grid_where_the_search_was_heading():
     assert rel.path == [grid.vertex(0, j) for j in range(grid.j_max + 1)]
     assert 0 < sub.n_grown == len(sub.allowed) - before
     assert len(solver.solved) < grid.size / 3
+
+
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), p_inf=st.sampled_from([0.0, 0.15, 0.35]),
+       path_len=st.integers(0, 4), cap=st.sampled_from([None, 2.0, 5.0]))
+def test_cut_bound_brackets_the_full_barrier(seed, p_inf, path_len, cap):
+    """The sub-landscape's release (no growth) brackets the full grid's brute-force
+    barrier: its ``lower`` (the cut around the settled set) from below, its ``U_A`` (a
+    found path) from above — with or without a cap; the capped search's ``U_A`` is then
+    itself a lower bound on the sub-landscape only, so ``lower`` is what bounds the full
+    grid."""
+    grid, U, start = _table(seed, p_inf)
+    path = [grid.vertex(0, j) for j in range(1, path_len + 1)]
+    allowed = _allowed(grid, start, path)
+    sub = RestrictedGrid(grid, allowed, most=len(allowed))
+    land = Landscape(_TableSolver(grid, U), Pad(0.0, 1e-3), sub, 0.0)
+    rel = land.release(start, 1.0, 0.0, cap, cut_bound=True)
+    ref = brute_force_barrier(grid, U, start)
+    assert rel.strict and rel.lower is not None
+    assert rel.lower <= ref + 1e-12
+    if not rel.bounded:
+        assert rel.U_A >= ref - 1e-12 and rel.lower <= rel.U_A
+    else:
+        assert rel.lower <= rel.U_A                      # the cap's level caps it too
+    # without the cut bound the release is the same search, no lower bound
+    plain = Landscape(_TableSolver(grid, U), Pad(0.0, 1e-3), sub, 0.0).release(start, 1.0, 0.0, cap)
+    assert plain.lower is None and plain.U_A == rel.U_A
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), p_inf=st.sampled_from([0.0, 0.2]))
+def test_cut_bound_of_the_whole_grid_is_the_barrier(seed, p_inf):
+    """``allowed`` = every vertex: with every axis reachable the cut is empty and ``lower``
+    is the barrier itself; an unreachable axis (``U = ∞``, never settled) stays in the cut
+    and counts as the level it was reached at — unreachable is not infinitely high — so
+    ``lower`` may then fall below the barrier, never above it."""
+    grid, U, start = _table(seed, p_inf)
+    sub = RestrictedGrid(grid, set(range(grid.size)))
+    land = Landscape(_TableSolver(grid, U), Pad(0.0, 1e-3), sub, 0.0)
+    rel = land.release(start, 1.0, 0.0, None, cut_bound=True)
+    ref = brute_force_barrier(grid, U, start)
+    assert rel.U_A == ref
+    if p_inf == 0.0:
+        assert rel.lower == ref
+    else:
+        assert rel.lower <= ref
+
+
+def test_cut_bound_by_hand():
+    """A valley along offset row 0 (energies 1, 2, 3, ... from the start), walls of 9
+    elsewhere except one low axis, energy 1.5, beside the valley's second vertex and
+    outside the allowed set: the search runs out (the sub-landscape holds no equilibrium),
+    and the lower bound is the climb to that axis from the start: max(level 2, 1.5) − 1."""
+    grid = _grid()
+    U = np.full(grid.size, 9.0)
+    for j in range(0, grid.j_max + 1):
+        U[grid.vertex(0, j)] = 1.0 + j
+    start = grid.vertex(0, 0)
+    allowed = {grid.vertex(0, j) for j in range(0, 3)}
+    beside = grid.vertex(1, 2)
+    assert beside in grid.neighbours(grid.vertex(0, 1)) or beside in grid.neighbours(grid.vertex(0, 2))
+    U[beside] = 1.5
+    sub = RestrictedGrid(grid, allowed, most=len(allowed))
+    land = Landscape(_TableSolver(grid, U), Pad(0.0, 1e-3), sub, 0.0)
+    rel = land.release(start, 1.0, 0.0, None, cut_bound=True)
+    assert math.isinf(rel.U_A)
+    reach = min(U[v] for v in allowed if beside in grid.neighbours(v))   # level of v = U(v) here
+    assert rel.lower == max(reach, 1.5) - 1.0

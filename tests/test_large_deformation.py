@@ -269,6 +269,7 @@ def test_optimize_neo_hookean_report_on_one_mesh():
     assert d["sigma_L"] < d["sigma_star"] < d["sigma0"]
     assert d["force"] > 0
     assert any("upper bound" in w for w in d["warnings"])
+    assert d["U_A_lower_infinite"] or 0 <= d["U_A_lower"] <= (d["U_A"] or math.inf)
 
 
 def test_elastic_limit_does_not_depend_on_the_bracketing_step(monkeypatch):
@@ -350,6 +351,9 @@ def test_neo_hookean_optimum_converges_under_refinement_like_the_linear_one():
         r = optimize_pads(mesh, axis, pad, noise=False)
         n = optimize_finite_strain(mesh, r)
         assert n.sigma_star is not None and n.quality > 0 and n.stopped is None
+        # pads seated in the notch hold it: the certified side of U_A (the cut around the
+        # re-solved axes) is a positive barrier, below the found path's
+        assert n.U_A_lower is not None and 0 < n.U_A_lower <= n.U_A
         neo.append((n.quality, n.sigma_star, n.sigma_L))
         lin.append((r.quality, r.sigma_star, r.sigma_L))
 

@@ -25,7 +25,7 @@ from ..landscape.optimum import maximise_sampled
 from .geometry import GraspAxis, Pad
 from .landscape import Landscape
 from .large_deformation import FiniteStrainCurve, FiniteStrainPads
-from .refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, RefinedPadGrasp
+from .refine import DEFAULT_MAX_SECONDS, DEFAULT_RTOL, RefinedPadGrasp, level_error
 
 __all__ = ["FiniteStrainResult", "RestrictedGrid", "grown_release", "optimize_finite_strain", "finite_strain_levels",
            "FiniteStrainRefinement",
@@ -136,6 +136,14 @@ class FiniteStrainResult:
         ``{"sigma", "U", "F", "U_A", "U_L", "Q"}`` at the evaluated separations.
     delta_unreachable : float or None
         The smallest squeeze (m) of the start axis the solver could not reach.
+    stopped : str or None
+        Why the σ*-search ended early (the time budget), or None.
+    U_A_lower : float or None
+        A lower bound (J) of the full landscape's finite-strain release energy at σ*
+        (:meth:`.landscape.Landscape.release`'s ``cut_bound``: the found barrier, or the
+        lowest climb off the re-solved axes across the cut around the search's settled
+        set); ``inf`` when the re-solved axes are the start's whole component; None when
+        not computed (no σ*). ``U_A`` itself is the upper bound of a found path.
     """
 
     elasticity: str
@@ -157,6 +165,7 @@ class FiniteStrainResult:
     noise_relative: float = 0.0
     start_curve: FiniteStrainCurve | None = field(default=None, repr=False)
     stopped: str | None = None
+    U_A_lower: float | None = None
 
     # ----------------------------------------------------------- a level of a refinement
     # The attributes :class:`.refine.RefinedPadGrasp` reads of a level, so that the one
@@ -215,7 +224,12 @@ class FiniteStrainResult:
         if self.stopped:
             out += (f"the finite-strain search stopped early ({self.stopped}): sigma* and Q* "
                     "are the best of the separations evaluated",)
-        return out + (UPPER_BOUND_NOTE,)
+        out += (UPPER_BOUND_NOTE,)
+        if self.U_A_lower is not None and math.isfinite(self.U_A_lower):
+            out += (f"the finite-strain U_A is at least {self.U_A_lower:.4g} J: every path off "
+                    "the re-solved axes climbs that high (the cut around the search's settled "
+                    "axes, SPEC §8)",)
+        return out
 
     def state_at(self, sigma: float, label: str):
         """Displacement (m) and nodal contact forces (N) of the start axis at ``sigma`` (m)
@@ -287,6 +301,9 @@ class FiniteStrainResult:
             "U_A": None if inf else self.U_A,
             "U_A_infinite": inf,
             "U_A_is_upper_bound": True,
+            "U_A_lower": (None if self.U_A_lower is None or math.isinf(self.U_A_lower)
+                          else self.U_A_lower),
+            "U_A_lower_infinite": self.U_A_lower is not None and math.isinf(self.U_A_lower),
             "U_L": self.U_L,
             "force": self.force,
             "stiffness": self.stiffness,
@@ -433,6 +450,12 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
     if rel.bounded:
         # σ*'s own barrier and escape path (the σ-search only needed U_A > U_L there)
         rel = release(sig_e, timed=False)
+    lower = None
+    if sigma_star is not None:
+        # the certified side: the full landscape's U_A is at least this (the cut around
+        # the settled axes solved; a few more axes, once)
+        lo = land.release(s, sig_e, tau, None, cut_bound=True)
+        lower = lo.lower if lo.strict else 0.0
     barrier = rel.strict and math.isfinite(rel.U_A) and sigma_star is not None
     path = [grid.axis(v) for v in rel.path] if barrier else []
     force = stiffness = strain = None
@@ -451,7 +474,7 @@ def optimize_finite_strain(mesh, linear, *, elasticity: str = "neo-hookean",
         U_L=UL if sigma_star is not None else 0.0, force=force, stiffness=stiffness,
         strain_at_sigma_star=strain, escape_path=path, n_axes=land.n_evaluated, curve=curve,
         delta_unreachable=start.delta_failed, noise_relative=tau, start_curve=start,
-        stopped=stopped)
+        stopped=stopped, U_A_lower=lower)
 
 
 def _curve(evals: dict, start: FiniteStrainCurve) -> dict:
@@ -528,3 +551,25 @@ class FiniteStrainRefinement(RefinedPadGrasp):
     @property
     def converged(self) -> bool:
         return super().converged and not any(x.stopped for x in self.levels)
+
+    @property
+    def verdict(self) -> str:
+        """:attr:`RefinedPadGrasp.verdict` with the certified side of U_A: a level's
+        ``U_A`` at finite strain is the upper bound of a found path (``∞`` when the
+        re-solved axes hold no escape), so "held" is decided on the lower bounds
+        ``U_A_lower`` (the cut, :class:`FiniteStrainResult`) — held when the finest lower
+        bound, less its level difference, clears the noise floor — and "not held" on
+        the upper bounds as before."""
+        base = super().verdict
+        if base != "undecided" or len(self.levels) < 2:
+            return base
+        fine = self.finest
+        lows = [x.U_A_lower for x in self.levels]
+        if any(v is None for v in lows[-2:]) or fine.quality <= 0 or fine.blind:
+            return base
+        lo, err = lows[-1], level_error(lows)
+        if math.isinf(lo):
+            return "held" if err == 0.0 else base
+        if err is not None and math.isfinite(err) and lo - err > fine.noise:
+            return "held"
+        return base

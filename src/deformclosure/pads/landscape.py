@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -153,6 +154,9 @@ class Release:
     bounded : bool
         The search stopped once the barrier exceeded the ``cap`` it was given: ``U_A`` is
         then a lower bound (``> cap``), ``saddle`` None and ``path`` empty.
+    lower : float or None
+        On a sub-landscape asked for its ``cut_bound`` (:meth:`Landscape.release`): a lower
+        bound (J) of the *full* grid's release energy; else None.
     """
 
     U_A: float
@@ -160,6 +164,26 @@ class Release:
     saddle: int | None
     path: list[int]
     bounded: bool = False
+    lower: float | None = None
+
+
+def _cut_level(esc, full: Callable[[int], list[int]], U: Callable[[int, int], float]
+               ) -> float:
+    """``min over the edges v → w, v settled, w a full-grid neighbour the search did not
+    settle, of max(level(v), U(w))`` (J), with an infinite ``U(w)`` counted as
+    ``level(v)``; ``inf`` when no such edge exists (:meth:`Landscape.release`'s
+    ``cut_bound``). ``U(w, v)``: the energy of ``w`` solved from ``v``'s state."""
+    S = set(esc.settled)
+    out = math.inf
+    for v in esc.settled:
+        lv = esc.levels[v]
+        if lv >= out:
+            continue                        # no edge from v can lower the bound
+        for w in full(v):
+            if w not in S:
+                Uw = U(w, v)
+                out = min(out, max(lv, Uw) if math.isfinite(Uw) else lv)
+    return out
 
 
 class Landscape:
@@ -288,7 +312,7 @@ class Landscape:
         return out
 
     def release(self, start: int, sigma: float, noise: float = 0.0,
-                cap: float | None = None) -> Release:
+                cap: float | None = None, cut_bound: bool = False) -> Release:
         """Minimax release from ``start`` at separation ``sigma`` (SPEC §4 on this grid).
 
         ``noise`` is the relative noise floor: two energies closer than ``noise`` × the
@@ -299,17 +323,32 @@ class Landscape:
         with ``cap = U_L``): the search stops at that level and the result is
         :attr:`Release.bounded`. Computed once per ``(start, sigma, noise, cap)``; an
         uncapped result answers every cap.
+
+        ``cut_bound`` (a sub-landscape only, :class:`~deformclosure.pads.
+        finite_strain_grasp.RestrictedGrid`): the release on a sub-landscape is an upper
+        bound of the full grid's (a path it finds is a path of the grid). A lower bound
+        comes with it (:attr:`Release.lower`): the search settled, in increasing level,
+        every vertex ``S`` it reached below its final level ``b`` (the barrier found,
+        where it stopped, or ``∞`` when it ran out), and ``S`` holds no other
+        equilibrium. A path of the full grid from the start to another equilibrium either
+        stays in the sub-landscape — it climbs at least ``b`` — or leaves ``S`` by an edge
+        ``v → w``, ``v ∈ S``, ``w ∉`` the sub-landscape, and climbs at least
+        ``max(level(v), U(w))`` (``level(v)``: the minimax level at which the search
+        reached ``v``). So the cut's vertices are solved and ``lower = min(b, min over
+        the cut of max(level(v), U(w))) − U(start)``; an unreachable ``w`` (``U = ∞``)
+        counts as ``level(v)`` (unreachable is not infinitely high). With an empty cut
+        the sub-landscape is the start's whole component and ``lower = U_A``.
         """
-        out = self._releases.get((start, sigma, noise, None))
+        out = self._releases.get((start, sigma, noise, None, cut_bound))
         if out is None:
-            key = (start, sigma, noise, cap)
+            key = (start, sigma, noise, cap, cut_bound)
             out = self._releases.get(key)
             if out is None:
-                out = self._releases[key] = self._release(start, sigma, noise, cap)
+                out = self._releases[key] = self._release(start, sigma, noise, cap, cut_bound)
         return out
 
     def _release(self, start: int, sigma: float, noise: float,
-                 cap: float | None = None) -> Release:
+                 cap: float | None = None, cut_bound: bool = False) -> Release:
         g, nbrs = self.grid, self.neighbours
         E: dict[int, float] = {}
 
@@ -328,11 +367,14 @@ class Landscape:
         confirm = None if full is None else (lambda v: all(U(v) <= U(w, v) for w in full(v)))
         esc = self.last_escape = minimax_escape(start, nbrs, U, stop_above=cap,  # SPEC §4
                                                 confirm=confirm)
+        lower = None
+        if cut_bound and full is not None:
+            lower = min(esc.barrier, _cut_level(esc, full, lambda w, v: U(w, v))) - Us
         if not esc.complete:
-            return Release(esc.barrier - Us, True, None, [], bounded=True)
+            return Release(esc.barrier - Us, True, None, [], bounded=True, lower=lower)
         if esc.target is None:
-            return Release(math.inf, True, None, [])
+            return Release(math.inf, True, None, [], lower=lower)
         b = esc.barrier
         if not resolved(b - Us, b, noise):      # a barrier the mesh cannot resolve is a tie
-            return Release(0.0, False, None, [])
-        return Release(b - Us, True, max(esc.path, key=U), esc.path)
+            return Release(0.0, False, None, [], lower=None if lower is None else 0.0)
+        return Release(b - Us, True, max(esc.path, key=U), esc.path, lower=lower)

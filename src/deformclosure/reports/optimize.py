@@ -240,7 +240,7 @@ def refinement_warnings(res) -> list[str]:
                    "its error bounds decide it; raise --max-seconds or --rtol")
     fine, e = res.finest, res.error_estimate()["U_A"]
     if e is not None and math.isfinite(fine.U_A) and fine.U_A > 0 \
-            and fine.U_A - e <= fine.noise < fine.U_A + e:
+            and fine.U_A - e <= fine.noise < fine.U_A + e and res.verdict == "undecided":
         out.append(f"the verdict hangs on the noise floor: U_A = {fine.U_A:.3g} ± {e:.3g} J "
                    f"straddles the floor {fine.noise:.3g} J (energy differences the mesh does "
                    "not resolve); refine further (a smaller --rtol) to decide it")
