@@ -2,39 +2,11 @@
 element loop of ``deformclosure.elasticity._neohookean_kernels`` replaced, kept as an
 independent reference: ``tests/test_neohookean.py`` compares the two on random states, and
 ``benchmarks/bench_neohookean.py`` times them side by side. (Copied from
-``deformclosure/elasticity/neohookean.py`` at a10d1c2; only this header and the class name
-differ.)
+``deformclosure/elasticity/neohookean.py`` at a10d1c2; this header, the class docstring and
+name and the constructor's material checks differ.)
 
-
-Per unit reference volume
-
-    W(F) = μ/2 (I₁ − 3 − 2 ln J) + λ/2 (ln J)²,   I₁ = tr(FᵀF),  J = det F,
-
-with the 3-D Lamé constants ``μ = E/(2(1+ν))``, ``λ = Eν/((1+ν)(1−2ν))`` of the part's
-``E``, ``ν``. ``F`` is 3×3 with the in-plane block ``F₂ = I + ∇u`` (constant on a linear
-triangle) and ``F₃₃ = s``: plane strain ``s = 1``; plane stress ``s`` such that
-``S₃₃ = ∂W/∂F₃₃ / s = 0``, i.e. ``μ(s² − 1) + λ ln(J₂ s) = 0`` with ``J₂ = det F₂`` — so
-``s`` depends on ``F₂`` through ``J₂`` only. The energy is ``Ψ(u) = Σ_e t A_e W(F_e)``.
-
-Derivatives (``Q = F₂⁻ᵀ``, ``ℓ = ln J = ln J₂ + ln s``, ``γ = λℓ − μ``): the in-plane first
-Piola–Kirchhoff stress is ``P = μF₂ + γQ`` for both planes (in plane stress ``∂W/∂s = 0``
-at the solved ``s``, so the dependence of ``s`` on ``F₂`` drops out of the gradient), and
-
-    ∂P_iJ/∂F_kL = μ δ_ik δ_JL + β Q_iJ Q_kL − γ Q_iL Q_kJ,
-
-with ``β = λ`` in plane strain and, in plane stress, the statically condensed
-``β = λ − W_Fs W_sF / W_ss = λ − λ²/(2μs² + λ) = 2μs²λ/(2μs² + λ)`` (``W_Fs = λQ/s``,
-``W_ss = 2μ + λ/s²`` at ``S₃₃ = 0``). At ``F = I`` this is the linear plane-stress or
-plane-strain elasticity tensor of §1 exactly (``β(1) = 2μλ/(2μ + λ)`` is the plane-stress
-λ*). With the shape-function gradients ``g_p = ∇N_p`` and ``a_p = Q g_p`` the element
-force and the 2×2 node blocks of the element tangent are
-
-    f_p = tA P g_p,   K_pq,ik = tA [μ δ_ik g_p·g_q + β a_p,i a_q,k − γ a_q,i a_p,k].
-
-The energy is evaluated in a form without cancellation near ``F = I``:
-``I₁ − 3 − 2ℓ = (H₁₁ − H₂₂)² + (H₁₂ + H₂₁)² + 2(x − ln(1 + x)) + (e^{2y} − 1 − 2y)``
-with ``H = ∇u``, ``x = J₂ − 1 = tr H + det H`` and ``y = ln s``, so small strains keep
-their relative precision.
+The law and its derivatives are derived in that module's docstring; this file evaluates
+them vectorised over the elements, with numpy.
 """
 
 from __future__ import annotations
@@ -44,9 +16,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from deformclosure.errors import DeformClosureError, StiffnessError
-from deformclosure.part import Material
-from deformclosure.elasticity.stiffness import _gradients, _Pattern
+from deformclosure.errors import DeformClosureError
 
 if TYPE_CHECKING:
     from deformclosure.mesh import Mesh
@@ -54,18 +24,6 @@ if TYPE_CHECKING:
 __all__ = ["NumpyNeoHookean"]
 
 _EPS = np.finfo(float).eps
-
-
-def lame_constants(material: Material) -> tuple[float, float]:
-    """3-D Lamé constants ``(μ, λ)`` (Pa) of the material's ``E``, ``ν`` (SPEC §8).
-
-    Examples
-    --------
-    >>> lame_constants(Material(2.6e6, 0.3, 1e-3, 0.8))        # doctest: +ELLIPSIS
-    (1000000.0, 1500000.0...)
-    """
-    E, nu = material.youngs_modulus, material.poisson_ratio
-    return E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
 
 def _x_minus_log1p(x: np.ndarray) -> np.ndarray:
@@ -116,75 +74,21 @@ def _times_gradients(M: np.ndarray, g: np.ndarray) -> np.ndarray:
 
 
 class NumpyNeoHookean:
-    """Total-Lagrangian compressible neo-Hookean energy of a triangle mesh (SPEC §8).
+    """The vectorised numpy form of :class:`deformclosure.elasticity.NeoHookean` (same
+    interface: ``energy``, ``gradient``, ``tangent``, ``energy_gradient_tangent``,
+    ``element_energies`` and the kinematic accessors; inverted elements give ``inf`` energy
+    and ``nan`` entries)."""
 
-    Parameters
-    ----------
-    mesh : Mesh
-        Linear triangles (counter-clockwise), nodes in m.
-    material : Material, optional
-        Defaults to ``mesh.material``. Uses ``youngs_modulus``, ``poisson_ratio``,
-        ``thickness`` and ``plane``; its ``model`` field is not read (this class *is* the
-        ``"neo-hookean"`` law).
+    def __init__(self, mesh: "Mesh") -> None:
+        from deformclosure.elasticity import NeoHookean
 
-    Attributes
-    ----------
-    n_dofs : int
-        ``2 * mesh.n_nodes``, DOF order ``[x0, y0, x1, y1, ...]``.
-    mu, lam : float
-        The 3-D Lamé constants μ, λ (Pa).
-    plane : {"stress", "strain"}
-    thickness : float
-        ``t`` (m).
-
-    Raises
-    ------
-    StiffnessError
-        If no material is known.
-
-    Notes
-    -----
-    Where an element is inverted (``J ≤ 0``, or in plane stress the condition ``S₃₃ = 0``
-    has no root — possible only for ``ν < 0`` under strong compression) the energy is
-    ``inf`` and that element's entries of the gradient and tangent are ``nan``; nothing is
-    raised, so a line search can step back. The tangent has the same CSR structure for
-    every ``u`` (the mesh's cached CST pattern), so a symbolic factorisation can be
-    reused. The model is of the law only: no gauge, no contact (those are ``contact/``'s).
-
-    Examples
-    --------
-    A unit square of two triangles, stretched 10 % along x: positive energy, no force on a
-    rigid translation, and the small-strain tangent equals the CST stiffness.
-
-    >>> from deformclosure import Mesh, stiffness_matrix
-    >>> mesh = Mesh.from_arrays([[0, 0], [1, 0], [1, 1], [0, 1]], [[0, 1, 2], [0, 2, 3]],
-    ...                         Material(1e6, 0.3, 1e-3, 0.1))
-    >>> law = NumpyNeoHookean(mesh)
-    >>> u = np.zeros(law.n_dofs); u[0::2] = 0.1 * mesh.nodes[:, 0]
-    >>> bool(law.energy(u) > 0), bool(abs(law.gradient(u) @ np.tile([1.0, 0.0], 4)) < 1e-9)
-    (True, True)
-    >>> K0 = stiffness_matrix(mesh)
-    >>> bool(abs(law.tangent(np.zeros(8)) - K0).max() < 1e-9 * abs(K0).max())
-    True
-    """
-
-    def __init__(self, mesh: "Mesh", material: Material | None = None) -> None:
-        material = material if material is not None else mesh.material
-        if material is None:
-            raise StiffnessError("no material: give the part's material (youngs_modulus, "
-                                 "poisson_ratio, thickness, elastic_limit_strain) with the mesh")
-        if not isinstance(material, Material):
-            raise StiffnessError(f"material = {material!r}: give a deformclosure Material")
-        self.mesh, self.material = mesh, material
-        self.mu, self.lam = lame_constants(material)
-        self.plane = material.plane
-        self.thickness = material.thickness
-        self.n_dofs = 2 * mesh.n_nodes
-        self._tri = np.asarray(mesh.triangles, dtype=np.int64)
-        b, c, a2 = _gradients(mesh.nodes, mesh.triangles)
-        self._g = np.stack([b, c], axis=-1) / a2[:, None, None]   # (m, 3, 2): ∇N_p (1/m)
-        self._vol = 0.5 * material.thickness * np.abs(a2)        # t A_e (m³)
-        self._pattern = _Pattern.of_mesh(mesh)
+        # the mesh data both forms share (Lamé constants, ∇N_p, t A_e, the CST pattern):
+        # not the law, which this class evaluates on its own
+        geo = NeoHookean(mesh)
+        self.mesh, self.material = mesh, mesh.material
+        self.mu, self.lam, self.plane = geo.mu, geo.lam, geo.plane
+        self.thickness, self.n_dofs = geo.thickness, geo.n_dofs
+        self._tri, self._g, self._vol, self._pattern = geo._tri, geo._g, geo._vol, geo._pattern
 
     # ------------------------------------------------------------------ kinematics
     def _kinematics(self, u: np.ndarray) -> _Kinematics:

@@ -35,25 +35,24 @@ _EXP_SERIES = np.array([1.0 / math.factorial(k) for k in range(14)])
 
 
 @njit(cache=True)
+def _tail_series(z: float, coef: np.ndarray) -> float:
+    """``Σ_{k≥2} coef[k] z^k`` by Horner's rule (the terms of ``coef`` from index 2)."""
+    acc = 0.0
+    for k in range(len(coef) - 1, 1, -1):
+        acc = coef[k] + z * acc
+    return z * z * acc
+
+
+@njit(cache=True)
 def x_minus_log1p(x: float) -> float:
     """``x − ln(1 + x)`` without cancellation for small ``|x|`` (series below 0.1)."""
-    if abs(x) < 0.1:
-        acc = 0.0
-        for k in range(17, 1, -1):
-            acc = _LOG_SERIES[k] + x * acc
-        return x * x * acc
-    return x - math.log1p(x)
+    return _tail_series(x, _LOG_SERIES) if abs(x) < 0.1 else x - math.log1p(x)
 
 
 @njit(cache=True)
 def expm1_minus(z: float) -> float:
     """``e^z − 1 − z`` without cancellation for small ``|z|`` (series below 0.1)."""
-    if abs(z) < 0.1:
-        acc = 0.0
-        for k in range(13, 1, -1):
-            acc = _EXP_SERIES[k] + z * acc
-        return z * z * acc
-    return math.expm1(z) - z
+    return _tail_series(z, _EXP_SERIES) if abs(z) < 0.1 else math.expm1(z) - z
 
 
 @njit(cache=True)
