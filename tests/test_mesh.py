@@ -360,3 +360,35 @@ def test_corrupted_mesh_files_fail_only_with_mesh_error(plate_mesh, edits):
         assert "\n" not in str(err)
     else:
         assert np.all(mesh.areas > 0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, 5), st.integers(0, 5), st.integers(0, 5)),
+                min_size=1, max_size=8))
+def test_edge_checks_agree_with_counting(tris):
+    """The manifold/overlap test of ``Mesh`` (sorted integer edge keys) against counting
+    the edges one by one with a Counter: the same error, or none, on random triangle sets
+    (connectivity aside)."""
+    from collections import Counter
+
+    from deformclosure.mesh.core import _check_manifold_and_connected
+
+    tri = np.array([t for t in tris if len(set(t)) == 3] or [(0, 1, 2)])
+    directed = Counter((int(t[k]), int(t[(k + 1) % 3])) for t in tri for k in range(3))
+    undirected = Counter(tuple(sorted(d)) for d in directed.elements())
+    if max(undirected.values()) > 2:
+        expect = "non-manifold"
+    elif max(directed.values()) > 1:
+        expect = "overlapping"
+    else:
+        expect = None
+    try:
+        _check_manifold_and_connected(tri, 6)
+        got = None
+    except MeshError as err:
+        got = ("non-manifold" if "non-manifold" in str(err) else
+               "overlapping" if "overlapping" in str(err) else "pieces")
+    if expect is None:
+        assert got in (None, "pieces")
+    else:
+        assert got == expect

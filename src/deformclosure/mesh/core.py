@@ -80,12 +80,16 @@ def _check_manifold_and_connected(tri: np.ndarray, n: int) -> None:
     """Each undirected edge in at most two triangles, with opposite directions
     (consistent orientation), and one connected piece."""
     e = directed_edges(tri)
-    _, counts = np.unique(np.sort(e, axis=1), axis=0, return_counts=True)
-    if np.any(counts > 2):
+    # edges as sorted integer keys (a 1-D sort; np.unique over rows sorted structured
+    # records, 1.6 s of an 80k-node optimize): an undirected key three times in a row is
+    # a non-manifold edge, a directed key twice an overlap
+    a, b = e[:, 0].astype(np.int64), e[:, 1].astype(np.int64)
+    und = np.sort(np.minimum(a, b) * n + np.maximum(a, b))
+    if np.any(und[2:] == und[:-2]):
         raise MeshError("triangles: mesh has a non-manifold edge (shared by more than two "
                         "triangles); remesh")
-    _, dcounts = np.unique(e, axis=0, return_counts=True)
-    if np.any(dcounts > 1):
+    directed = np.sort(a * n + b)
+    if np.any(directed[1:] == directed[:-1]):
         raise MeshError("triangles: mesh has overlapping triangles (an edge used twice in one "
                         "direction); remesh")
     adj = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
