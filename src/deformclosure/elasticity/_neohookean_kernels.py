@@ -64,9 +64,10 @@ def log_thickness_stretch(L2: float, mu: float, lam: float) -> float:
     monotonically to the (for ``λ < 0`` larger, stable) root. Start: the linearised root
     ``y₀ = −λ L₂ / (2μ + λ)`` (``h(y₀) ≥ 0`` as ``e^{2y} − 1 ≥ 2y``), capped for ``λ > 0``
     by ``½ ln(1 − λ L₂ / μ)`` (``h = λ y ≥ 0`` there; keeps ``e^{2y}`` finite under
-    extreme compression). For ``λ < 0`` a root exists iff ``h ≤ 0`` at the minimum
-    ``y* = ½ ln(−λ / 2μ)``; then ``h'(y₀) > 0`` and Newton finds the larger root
-    (the derivation is in :mod:`deformclosure.elasticity.neohookean`).
+    extreme compression). For ``λ < 0`` a root exists iff ``h(y*) ≤ 0`` at the minimum
+    ``y* = ½ ln r``, ``r = −λ/(2μ) ∈ (0, ⅓)``, i.e. ``ln J₂ ≥ (r − 1 − r ln r)/(2r)``; then
+    ``y₀ − y* ≥ −½ − ln r / (2(1 − r)) > 0.32``, so ``h'(y₀) > 0`` and Newton finds the
+    larger root.
     """
     if not math.isfinite(L2):
         return math.nan

@@ -32,7 +32,8 @@ their relative precision.
 
 The element loop — kinematics, the plane-stress thickness root, energy, stress and the
 tangent's element blocks added straight into the CST pattern's CSR values — is compiled
-(:mod:`._neohookean_kernels`; ~10× the vectorised numpy form it replaced, which
+(:mod:`._neohookean_kernels`; 3.5–9× the vectorised numpy form it replaced per full
+pass, ``benchmarks/bench_neohookean.py``, which
 ``tests/neohookean_reference.py`` keeps as the reference the tests compare with).
 """
 

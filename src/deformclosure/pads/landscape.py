@@ -369,7 +369,7 @@ class Landscape:
                                                 confirm=confirm)
         lower = None
         if cut_bound and full is not None:
-            lower = min(esc.barrier, _cut_level(esc, full, lambda w, v: U(w, v))) - Us
+            lower = min(esc.barrier, _cut_level(esc, full, U)) - Us
         if not esc.complete:
             return Release(esc.barrier - Us, True, None, [], bounded=True, lower=lower)
         if esc.target is None:
