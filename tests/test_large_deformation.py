@@ -145,8 +145,7 @@ def test_every_solve_satisfies_the_contact_conditions():
     st_ = c.state(2e-3)
     prob = c.problem
     g, n, _ = prob.gaps(st_.u, c.bodies_at(2e-3))
-    f = np.zeros(prob.n_dofs)
-    np.add.at(f, prob._dofs, (st_.lam[:, None] * n).ravel())
+    f = prob.nodal_forces(st_.lam, n).ravel()
     G = np.asarray(prob.G.todense())
     r = fs.law.gradient(st_.u) - f - G.T @ st_.mu
     scale = np.abs(f).max()
@@ -244,9 +243,10 @@ def test_elasticity_option_is_validated_in_one_line(capsys):
     code, err = run("optimize", "examples/rectangle.json", "--model", "paper", "--at", "0,10",
                     "12,10", "--elasticity", "neo-hookean")
     assert code == 2 and "only with the pads model" in err
+    # check at finite strain: point fingers are refused before any work, in one line
     code, err = run("check", "examples/l_shape.json", "--fingers",
                     "examples/fingers/l_shape.json", "--elasticity", "neo-hookean")
-    assert code == 2 and "not supported by check yet" in err
+    assert code == 2 and "point finger has no finite-strain contact" in err
     assert len(err.strip().splitlines()) == 1
 
 

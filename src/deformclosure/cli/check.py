@@ -33,6 +33,12 @@ fingers; deform_closure = U_A > its error at a strict minimum. The rigid-motion 
 rest (Thm 1) is reported as rigid_closure with its order and certificate. The escape
 path (placements in m and rad, energies in J) is in the report and, with --plot, drawn
 beside the check picture with its energy profile.
+
+\b
+--elasticity neo-hookean (or material.model in the part file) searches the same
+placements at finite strain (SPEC §8; disc and half-plane fingers): U_A of the whole
+lattice when the search ends within --max-seconds, else a bracket U_A_lower..U_A on
+which the verdict is decided; linear_model_error compares the two models.
 """
 
 

@@ -236,6 +236,17 @@ class Finger(ABC):
     def to_dict(self, scale: float = 1.0) -> dict:
         """The finger-file entry, lengths divided by ``scale`` (m per file unit)."""
 
+    def obstacle(self, where: str, axis: Any = (0.0, 0.0)) -> Any:
+        """The finger as a body of the finite-strain contact solver (SPEC §8,
+        :mod:`.large_deformation`: signed distance, unit gradient and curvature of points
+        against it), same frame; ``axis``: a disc's pressing direction (it presses like a
+        round pad on that axis, carried by the finger behind it). Kinds without one raise
+        :class:`FingerError` naming ``where``: the solver's rows are boundary nodes
+        against bodies, so a body must be smooth or meet the part with faces."""
+        raise FingerError(f"{where}: a {self.type} finger has no finite-strain contact yet "
+                          "(SPEC §8: boundary nodes against smooth bodies); use disc and "
+                          "half-plane fingers, or --elasticity linear")
+
 
 @dataclass(frozen=True)
 class PointFinger(Finger):
@@ -259,6 +270,11 @@ class PointFinger(Finger):
     @property
     def has_interior(self) -> bool:
         return False
+
+    def obstacle(self, where: str, axis: Any = (0.0, 0.0)) -> Any:
+        raise FingerError(f"{where}: a point finger has no finite-strain contact (a point "
+                          "force in 2-D makes an unbounded strain, SPEC §8); model the "
+                          "fingertip as a disc, or use --elasticity linear")
 
     def signed_distance(self, points: Any) -> np.ndarray:
         return np.linalg.norm(_as_points(points) - np.asarray(self.at), axis=-1)
@@ -368,6 +384,15 @@ class DiscFinger(Finger):
         par[3:5] = axis
         par[5] = self.shape.reach
         return KERNEL_DISC, par, np.zeros((0, 2)), np.zeros((0, 2))
+
+    def obstacle(self, where: str, axis: Any = (0.0, 0.0)) -> Any:
+        from .large_deformation import CapsuleObstacle
+
+        a = np.asarray(axis, float)
+        back = (float(-a[0]), float(-a[1])) if np.hypot(*a) > 0 else None
+        c = (float(self.center[0]), float(self.center[1]))
+        # the round front against the part's edges (edge rows), the flanks against its nodes
+        return CapsuleObstacle(c, c, float(self.radius), back, front_by_edges=True)
 
     def _outline(self) -> tuple[np.ndarray, np.ndarray]:
         k = 16                                  # circumscribed 16-gon
@@ -524,6 +549,12 @@ class HalfPlaneFinger(Finger):
         n = np.asarray(self.normal)
         p0 = np.asarray(self.point)
         return ((a - p0) @ n < -tol) | ((b - p0) @ n < -tol)
+
+    def obstacle(self, where: str, axis: Any = (0.0, 0.0)) -> Any:
+        from .large_deformation import HalfPlaneObstacle
+
+        return HalfPlaneObstacle((float(self.point[0]), float(self.point[1])),
+                                 (float(self.normal[0]), float(self.normal[1])))
 
     def reference_points(self) -> np.ndarray:
         return np.asarray([self.point])

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Protocol, Sequence
+from typing import Callable, NamedTuple, Protocol, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -49,7 +49,7 @@ try:                                    # optional: a faster factorisation of th
 except ImportError:                     # pragma: no cover - depends on the installation
     _qdldl = None
 
-__all__ = ["CapsuleObstacle", "ContactState", "FiniteStrainContact", "SqueezePath",
+__all__ = ["CapsuleObstacle", "HalfPlaneObstacle", "ContactState", "FiniteStrainContact", "SqueezePath",
            "follow_squeeze", "RESIDUAL_TOL"]
 
 #: Relative residual at which a Newton solve has converged (SPEC §8: ≤ 1e-10).
@@ -61,6 +61,19 @@ MAX_NEWTON = 30
 STALL = 4
 #: A full Newton step is taken while the residual grows by less than this factor.
 NONMONOTONE = 10.0
+#: Of the edge rows of one disc, only those that are a local minimum of the distance along
+#: the boundary are on (ties, a foot clamped to a shared vertex, go to the edge that ends
+#: there): so at every vertex exactly one row measures the distance, and as a contact
+#: point crosses a vertex the row that holds it changes with equal values *and* gradients
+#: (the distance to a polyline is continuously differentiable across a vertex region) —
+#: never two nearly parallel active rows on one point, which split their force with
+#: opposite signs and stall Newton (measured: a disc pressing a node of a flat side, with
+#: node rows beside edge rows and with both edges of the node on). A disc in a notch has
+#: one local minimum per wall it touches.
+#: The gap (m) of a row that is off (beyond any reach).
+OFF_GAP = 1.0e3
+#: Re-solves of a Newton step by the active-set loop of its linearised contact problem.
+QP_SWEEPS = 8
 #: Halvings of a squeeze step before the squeeze is reported as not reached.
 MAX_HALVINGS = 5
 #: Factorisation of the Newton systems: ``"qdldl"`` (when installed) or ``"superlu"``.
@@ -115,6 +128,10 @@ class CapsuleObstacle:
     q: tuple[float, float]
     radius: float
     back: tuple[float, float] | None = None
+    #: The round front is held by the solver's *edge rows* (:meth:`centres`), not by its
+    #: node rows: points in front of the segment's line then get no node-row gap (a
+    #: large one), those behind it the finger's flanks as before.
+    front_by_edges: bool = False
 
     def distance(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Signed distances (m), unit gradients and Hessians (1/m) at points ``X`` (k, 2).
@@ -143,6 +160,10 @@ class CapsuleObstacle:
         end = (t <= 0.0) | (t >= 1.0) if L2 > 0 else np.ones(len(X), bool)
         k = np.where(end, 1.0 / safe, 0.0)
         H = k[:, None, None] * (np.eye(2)[None] - n[:, :, None] * n[:, None, :])
+        if self.front_by_edges:
+            front = np.ones(len(X), bool) if self.back is None else \
+                (X - p) @ np.asarray(self.back, float) <= 0
+            g[front], n[front], H[front] = OFF_GAP, 0.0, 0.0
         if self.back is not None:
             b = np.asarray(self.back, float)
             behind = (X - p) @ b > 0
@@ -155,6 +176,49 @@ class CapsuleObstacle:
                 n[behind] = side[:, None] * ehat[None, :]
                 H[behind] = 0.0
         return g, n, H
+
+    def centres(self) -> np.ndarray:
+        """The round ends' centres and radius, rows ``(x, y, radius)`` (m): the part's
+        boundary *edges* are kept outside these discs (edge rows of
+        :class:`FiniteStrainContact`), so a facet cannot sag into a round end between two
+        nodes."""
+        ends = [self.p] if self.p == self.q else [self.p, self.q]
+        return np.array([(x, y, self.radius) for x, y in ends], float)
+
+    def moved(self, A: np.ndarray, b: np.ndarray) -> "CapsuleObstacle":
+        """The capsule carried by the rigid motion ``x → A x + b`` (``A`` a rotation)."""
+        A, b = np.asarray(A, float), np.asarray(b, float)
+        p, q = A @ np.asarray(self.p, float) + b, A @ np.asarray(self.q, float) + b
+        back = None if self.back is None else tuple(float(v) for v in A @ np.asarray(self.back, float))
+        return CapsuleObstacle((float(p[0]), float(p[1])), (float(q[0]), float(q[1])),
+                               self.radius, back, self.front_by_edges)
+
+
+@dataclass(frozen=True)
+class HalfPlaneObstacle:
+    """A rigid half-plane ``{x : (x − point)·normal ≤ 0}`` (m); ``normal`` is the unit
+    vector out of the body, towards the part. Its signed distance is affine: gradient
+    ``normal``, no curvature."""
+
+    point: tuple[float, float]
+    normal: tuple[float, float]
+
+    def distance(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Signed distances (m), unit gradients and Hessians (1/m) at points ``X`` (k, 2)."""
+        X = np.asarray(X, float)
+        nv = np.asarray(self.normal, float)
+        g = (X - np.asarray(self.point, float)) @ nv
+        return g, np.broadcast_to(nv, X.shape).copy(), np.zeros((len(X), 2, 2))
+
+    def centres(self) -> np.ndarray:
+        """No round part: a flat face meets a part's edge at a node."""
+        return np.zeros((0, 3))
+
+    def moved(self, A: np.ndarray, b: np.ndarray) -> "HalfPlaneObstacle":
+        """The half-plane carried by the rigid motion ``x → A x + b``."""
+        A, b = np.asarray(A, float), np.asarray(b, float)
+        p, nv = A @ np.asarray(self.point, float) + b, A @ np.asarray(self.normal, float)
+        return HalfPlaneObstacle((float(p[0]), float(p[1])), (float(nv[0]), float(nv[1])))
 
 
 @dataclass
@@ -179,6 +243,9 @@ class ContactState:
         Relative residual of the stationarity and complementarity conditions.
     iterations : int
     converged : bool
+    edge_weights : ndarray or None
+        Edge rows: the force's share ``s`` of each edge's second node (``1 − s`` on the
+        first); None without edge rows.
     """
 
     u: np.ndarray
@@ -190,9 +257,10 @@ class ContactState:
     residual: float
     iterations: int
     converged: bool
+    edge_weights: np.ndarray | None = None
 
     def forces(self) -> np.ndarray:
-        """Contact forces on the part (N), shape (r, 2)."""
+        """Contact forces on the part (N), one per row, shape (r, 2)."""
         return self.lam[:, None] * self.normals
 
 
@@ -216,26 +284,57 @@ class FiniteStrainContact:
         dissection of the node graph (the multipliers last), which SuperLU factorises
         5–6 times faster than in its own column order on a 5k-node part
         (``benchmarks/bench_large_deformation.py``).
+    edges : sequence of (ndarray of int (m, 2), int, int), optional
+        *Edge rows*: ``(boundary edges as node pairs, body index, centre index)`` — each
+        edge kept outside the disc ``body.centres()[centre]`` (a round end of the body).
+        Node rows alone let a straight facet between two nodes sag into a round body by
+        up to ``L²/8ρ`` (edge length ``L``, radius ``ρ``): on a coarse mesh a disc then
+        nests in the facets of a flat side and holds a convex part. The gap of an edge
+        row is the distance of the centre from the segment less ``ρ`` (:func:`_edge_rows`);
+        a row is on where the centre lies in front of the edge and that distance is a
+        local minimum along the boundary loop (the note above :data:`OFF_GAP`). A body
+        held by edge rows keeps its round parts out of its node rows
+        (``CapsuleObstacle.front_by_edges``), so no point is held by two kinds of rows.
+
+    Rows are ordered node rows first, then edge rows; :attr:`body` gives each row's body.
     """
 
     def __init__(self, material: Material, nodes: np.ndarray,
                  rows: Sequence[tuple[np.ndarray, int]], gauge: np.ndarray,
-                 length: float, triangles: np.ndarray | None = None) -> None:
+                 length: float, triangles: np.ndarray | None = None,
+                 edges: Sequence[tuple[np.ndarray, int, int]] = ()) -> None:
         self.material = material
         self.X = np.asarray(nodes, float)
         self.n_dofs = 2 * len(self.X)
         ids = [np.asarray(r[0], np.int64) for r in rows]
         self.node = np.concatenate(ids) if ids else np.zeros(0, np.int64)
-        self.body = np.concatenate([np.full(len(i), r[1], np.int64) for i, r in zip(ids, rows)]) \
+        node_body = np.concatenate([np.full(len(i), r[1], np.int64) for i, r in zip(ids, rows)]) \
             if ids else np.zeros(0, np.int64)
+        pairs = [np.asarray(e[0], np.int64).reshape(-1, 2) for e in edges]
+        self.edge = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+        self.edge_body = (np.concatenate([np.full(len(q), e[1], np.int64) for q, e in zip(pairs, edges)])
+                          if pairs else np.zeros(0, np.int64))
+        self.edge_centre = (np.concatenate([np.full(len(q), e[2], np.int64) for q, e in zip(pairs, edges)])
+                            if pairs else np.zeros(0, np.int64))
+        self.n_node_rows = len(self.node)
+        self.body = np.concatenate([node_body, self.edge_body])
+        # each edge row's neighbours along its boundary loop (same body and centre), -1 at
+        # an open end: the rows that are a local minimum of the distance are the ones on
+        self._edge_next = np.full(len(self.edge), -1, np.int64)
+        self._edge_prev = np.full(len(self.edge), -1, np.int64)
+        key = {(int(b), int(k), int(a)): i for i, (a, b, k) in
+               enumerate(zip(self.edge[:, 0], self.edge_body, self.edge_centre))}
+        for i, (b_end, b, k) in enumerate(zip(self.edge[:, 1], self.edge_body, self.edge_centre)):
+            j = key.get((int(b), int(k), int(b_end)), -1)
+            if j >= 0:
+                self._edge_next[i], self._edge_prev[j] = j, i
+        self.n_rows = len(self.body)
         self.G = sp.csr_matrix(np.asarray(gauge, float))
         self.length = float(length)
         self.gap_tol = RESIDUAL_TOL * self.length
         self.area = float(np.ptp(self.X[:, 0]) * np.ptp(self.X[:, 1])) if len(self.X) else 0.0
         self._floor: float | None = None
         self._pattern: _KKTPattern | None = None
-        dofs = np.column_stack([2 * self.node, 2 * self.node + 1]).ravel()
-        self._dofs = dofs
         if triangles is not None and len(self.X) > 2:
             perm = nested_dissection_order(node_adjacency(np.asarray(triangles), len(self.X)))
             self._order = np.column_stack([2 * perm, 2 * perm + 1]).ravel()
@@ -244,16 +343,30 @@ class FiniteStrainContact:
 
     # -------------------------------------------------------------------- geometry
     def gaps(self, u: np.ndarray, bodies: Sequence[CapsuleObstacle]
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Signed distances (m), unit normals and Hessians (1/m) of every row at ``u``."""
+             ) -> tuple[np.ndarray, np.ndarray, "RowCurvature"]:
+        """Signed distances (m) and unit normals (the direction of each row's force on the
+        part) of every row at ``u``, and the rows' curvature (:class:`RowCurvature`)."""
+        rn = self.n_node_rows
         x = self.X[self.node] + u.reshape(-1, 2)[self.node]
-        r = len(self.node)
-        g, n, H = np.empty(r), np.empty((r, 2)), np.empty((r, 2, 2))
+        g, n, H = np.empty(self.n_rows), np.empty((self.n_rows, 2)), np.empty((rn, 2, 2))
+        nb = self.body[:rn]
         for b, body in enumerate(bodies):
-            sel = self.body == b
+            sel = nb == b
             if sel.any():
-                g[sel], n[sel], H[sel] = body.distance(x[sel])
-        return g, n, H
+                g[:rn][sel], n[:rn][sel], H[sel] = body.distance(x[sel])
+        s, He = np.zeros(len(self.edge)), np.zeros((len(self.edge), 4, 4))
+        if len(self.edge):
+            U = u.reshape(-1, 2)
+            xa = self.X[self.edge[:, 0]] + U[self.edge[:, 0]]
+            xb = self.X[self.edge[:, 1]] + U[self.edge[:, 1]]
+            C = np.zeros((len(self.edge), 3))
+            for b, body in enumerate(bodies):
+                sel = self.edge_body == b
+                if sel.any():
+                    C[sel] = body.centres()[self.edge_centre[sel]]
+            g[rn:], n[rn:], s, He = _edge_rows(xa, xb, C, OFF_GAP, self._edge_prev,
+                                               self._edge_next)
+        return g, n, RowCurvature(H, s, He)
 
     # -------------------------------------------------------------------- one solve
     def solve(self, bodies: Sequence[CapsuleObstacle], u0: np.ndarray | None = None,
@@ -284,7 +397,7 @@ class FiniteStrainContact:
             ``converged`` False when the iteration did not reach :data:`RESIDUAL_TOL`
             within :data:`MAX_NEWTON` steps.
         """
-        nd, r, k = self.n_dofs, len(self.node), self.G.shape[0]
+        nd, r, k = self.n_dofs, self.n_rows, self.G.shape[0]
         u = np.zeros(nd) if u0 is None else np.array(u0, float)
         lam = np.zeros(r) if lam0 is None else np.array(lam0, float)
         mu = np.zeros(k) if mu0 is None else np.array(mu0, float)
@@ -292,7 +405,7 @@ class FiniteStrainContact:
         E, grad, Kt = mat.energy_gradient_tangent(u)
         g, n, H = self.gaps(u, bodies)
         if not math.isfinite(E):                 # an inverted element: no Newton step
-            return ContactState(u, lam, mu, math.inf, g, n, math.inf, 0, False)
+            return ContactState(u, lam, mu, math.inf, g, n, math.inf, 0, False)  # noqa: E501
         c = float(Kt.diagonal().mean())          # N/m: the scale of min(λ, c g)
         if self._floor is None:
             # Round-off of the internal force: about eps × (stiffness × element size) per
@@ -302,7 +415,7 @@ class FiniteStrainContact:
             # that floor.
             h = math.sqrt(self.area / max(self.n_dofs // 2, 1))
             self._floor = 100.0 * np.finfo(float).eps * c * h / RESIDUAL_TOL
-        res = self._residual(u, lam, mu, grad, g, n, c, force_scale)
+        res = self._residual(u, lam, mu, grad, g, n, H, c, force_scale)
         it = 0
         prev_active = None
         seen: set[bytes] = set()
@@ -318,7 +431,10 @@ class FiniteStrainContact:
                 break
             if res <= RESIDUAL_TOL and it > 0 and self._complementary(lam, g):
                 break
-            step = self._newton_step(u, lam, mu, grad, Kt, g, n, H, active)
+            # a repeated active set: the semismooth steps cycle; the step is then the
+            # linearised problem's own solution (:meth:`_qp_step`)
+            step = (self._qp_step if cycling else self._newton_step)(u, lam, mu, grad, Kt, g, n, H,
+                                                                     active)
             if step is None:
                 break
             du, lam_new, mu_new = step
@@ -334,7 +450,7 @@ class FiniteStrainContact:
                 Et, gt_ = mat.energy_gradient(ut)
                 if math.isfinite(Et):
                     gg, nn, HH = self.gaps(ut, bodies)
-                    rt = self._residual(ut, lt, mt, gt_, gg, nn, c, force_scale)
+                    rt = self._residual(ut, lt, mt, gt_, gg, nn, HH, c, force_scale)
                     limit = NONMONOTONE * res if alpha == 1.0 and not cycling else res
                     if rt < limit or alpha < 1e-3 or not np.isfinite(res):
                         accepted = True
@@ -350,7 +466,8 @@ class FiniteStrainContact:
                 best_res, best_it = res, it
         lam = np.where((lam - c * g) > 0, np.maximum(lam, 0.0), 0.0)
         converged = bool(res <= RESIDUAL_TOL and self._complementary(lam, g))
-        return ContactState(u, lam, mu, float(E), g, n, float(res), it, converged)
+        return ContactState(u, lam, mu, float(E), g, n, float(res), it, converged,
+                            H.s if len(self.edge) else None)
 
     def _complementary(self, lam: np.ndarray, g: np.ndarray) -> bool:
         """No row penetrates beyond the gap tolerance and no active row pulls."""
@@ -358,10 +475,10 @@ class FiniteStrainContact:
         on = lam > 0
         return bool(np.all(g >= -tol) and np.all(np.abs(g[on]) <= tol) and np.all(lam >= 0))
 
-    def _residual(self, u, lam, mu, grad, g, n, c, force_scale) -> float:
+    def _residual(self, u, lam, mu, grad, g, n, H, c, force_scale) -> float:
         """Relative residual: stationarity over the force scale, complementarity
         ``min(λ, c g)`` over the same scale, the gauge over the length scale."""
-        r_u = grad - self._contact_load(lam, n) - self.G.T @ mu
+        r_u = grad - self._contact_load(lam, n, H) - self.G.T @ mu
         scale = force_scale
         if scale is None:
             scale = max(float(np.abs(grad).max(initial=0.0)), float(np.abs(lam).max(initial=0.0)))
@@ -371,11 +488,69 @@ class FiniteStrainContact:
         return float(max(np.abs(r_u).max(initial=0.0) / scale,
                          np.abs(ncp).max(initial=0.0) / scale, gauge))
 
-    def _contact_load(self, lam: np.ndarray, n: np.ndarray) -> np.ndarray:
+    def _contact_load(self, lam: np.ndarray, n: np.ndarray, H: "RowCurvature") -> np.ndarray:
         """``Σ_j λ_j ∇g_j`` (N), shape (2n,)."""
-        f = np.zeros(self.n_dofs)
-        np.add.at(f, self._dofs, (lam[:, None] * n).ravel())
+        return self.nodal_forces(lam, n, H.s).ravel()
+
+    def nodal_forces(self, lam: np.ndarray, n: np.ndarray,
+                     edge_weights: np.ndarray | None = None) -> np.ndarray:
+        """The rows' forces ``λ_j n_j`` (N) summed on the nodes, shape (n_nodes, 2): a node
+        row's on its node, an edge row's shared ``1 − s``, ``s`` by its two nodes."""
+        rn = self.n_node_rows
+        f = np.zeros((len(self.X), 2))
+        np.add.at(f, self.node, lam[:rn, None] * n[:rn])
+        if len(self.edge) and edge_weights is not None:
+            fe = lam[rn:, None] * n[rn:]
+            s = edge_weights[:, None]
+            np.add.at(f, self.edge[:, 0], (1.0 - s) * fe)
+            np.add.at(f, self.edge[:, 1], s * fe)
         return f
+
+    def state_forces(self, state: "ContactState") -> np.ndarray:
+        """:meth:`nodal_forces` of a converged state (N), shape (n_nodes, 2)."""
+        return self.nodal_forces(state.lam, state.normals, state.edge_weights)
+
+    def _qp_step(self, u, lam, mu, grad, Kt, g, n, H, active):
+        """The Newton step of the active set ``active``, made the solution of the
+        linearised (quadratic) contact problem by a primal–dual active-set loop: while a
+        row of the set pulls (``λ < 0``, the most negative leaves) or a row outside it
+        penetrates at first order (``g + ∇g·Δu < 0``, the deepest joins), the step is
+        solved again. With two nearly parallel rows on almost one point (a disc on the
+        two edges of a dented node) the plain semismooth step splits their force with
+        opposite signs and the next step swaps them, without end; the subproblem's own
+        solution does not (at most :data:`QP_SWEEPS` re-solves). Used once an active set
+        repeats: on the pads' curves the semismooth steps rarely cycle, and re-solving
+        every step measured 58 → 97 s on the three-level notched-bar test."""
+        A = active.copy()
+        step = None
+        tol = self.gap_tol
+        for _ in range(QP_SWEEPS + 1):
+            step = self._newton_step(u, lam, mu, grad, Kt, g, n, H, A)
+            if step is None:
+                return None
+            du, lam_new, _ = step
+            pull = A & (lam_new < 0.0)
+            if pull.any():
+                A[np.flatnonzero(pull)[np.argmin(lam_new[pull])]] = False
+                continue
+            lin = g + self._row_dot(n, H.s, du)
+            deep = ~A & (lin < -tol)
+            if deep.any():
+                A[np.flatnonzero(deep)[np.argmin(lin[deep])]] = True
+                continue
+            break
+        return step
+
+    def _row_dot(self, n: np.ndarray, s: np.ndarray, du: np.ndarray) -> np.ndarray:
+        """``∇g_j · Δu`` (m) of every row."""
+        rn = self.n_node_rows
+        D = du.reshape(-1, 2)
+        out = np.einsum("ij,ij->i", n[:rn], D[self.node])
+        if len(self.edge):
+            ne = n[rn:]
+            de = (1.0 - s)[:, None] * D[self.edge[:, 0]] + s[:, None] * D[self.edge[:, 1]]
+            out = np.concatenate([out, np.einsum("ij,ij->i", ne, de)])
+        return out
 
     def _newton_step(self, u, lam, mu, grad, Kt, g, n, H, active):
         """One primal–dual active-set Newton step; returns ``(Δu, λ⁺, μ⁺)``, or ``None``
@@ -387,16 +562,19 @@ class FiniteStrainContact:
         force set to zero). So the pattern is the same at every step: it is built once
         (:class:`_KKTPattern`) and each step only fills its values.
         """
-        nd, r = self.n_dofs, len(self.node)
+        nd, r, rn = self.n_dofs, self.n_rows, self.n_node_rows
         pat = self._pattern
         if pat is None or not pat.fits(Kt):
-            pat = self._pattern = _KKTPattern(Kt, self.node, self.G, self._order)
+            pat = self._pattern = _KKTPattern(Kt, self.node, self.edge, self.G, self._order)
         A = active
         lamA = np.where(A, lam, 0.0)
-        r_u = grad - self._contact_load(lamA, n) - self.G.T @ mu
-        # the pad's surface curvature under the active forces, on the nodes' diagonal blocks
-        curv = -(lamA[:, None, None] * H)
-        KKT = pat.matrix(Kt.data, curv, n, A)
+        r_u = grad - self._contact_load(lamA, n, H) - self.G.T @ mu
+        # the bodies' surface curvature under the active forces: on the nodes' diagonal
+        # blocks (node rows), on the edges' two nodes (edge rows)
+        curv = -(lamA[:rn, None, None] * H.node)
+        ecurv = -(lamA[rn:, None, None] * H.edge)
+        grads = _row_gradients(n, H.s, rn)
+        KKT = pat.matrix(Kt.data, curv, ecurv, grads, A)
         o = self._order
         rhs = np.concatenate([-r_u[o], np.where(A, g, -lam), self.G @ u])
         sol = pat.solve_ldl(KKT, rhs, nd) if LINEAR_SOLVER == "qdldl" else None
@@ -422,31 +600,125 @@ class FiniteStrainContact:
         return du, lam_new, mu_new
 
 
+class RowCurvature(NamedTuple):
+    """The rows' second derivatives (1/m): node rows' Hessians ``node`` (r_n, 2, 2) in
+    their node's position; edge rows' foot parameters ``s`` (r_e,) — the force's share of
+    the edge's second node — and Hessians ``edge`` (r_e, 4, 4) in their two nodes'
+    positions."""
+
+    node: np.ndarray
+    s: np.ndarray
+    edge: np.ndarray
+
+
+def _edge_rows(xa: np.ndarray, xb: np.ndarray, C: np.ndarray, off: float,
+               prev: np.ndarray | None = None, nxt: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Gaps (m), unit normals, foot parameters and Hessians (1/m, over ``(x_a, x_b)``) of
+    edges ``x_a → x_b`` (part's interior on their left) against discs ``C = (x, y, ρ)``.
+
+    The gap is the distance ``d`` from the centre ``c`` to the segment less ``ρ``, at the
+    foot ``s = (c − x_a)·e / L²`` clamped to ``[0, 1]`` (``e = x_b − x_a``, ``L = |e|``);
+    the normal ``m = (f − c)/d`` points from the centre to the foot ``f`` (the force on
+    the part). ``∇d = [(1 − s) m, s m]`` (the envelope of the distance over the segment's
+    points). Inside the segment ``d`` is the line distance, smooth in the edge's ends:
+    ``∇²d = −(Jᵀe wᵀ + w eᵀJ)/L² − d w wᵀ/L²`` with ``J = [(1 − s)I, sI]`` and
+    ``w = [−m, m]`` (from ``d = min_s |x_a + s e − c|``; checked against finite
+    differences in the tests); at an end vertex ``(I − m mᵀ)/d`` on its node. A row is
+    off (gap ``off``, no gradient) when the centre is not in front of the edge's line or,
+    with ``prev``/``nxt`` (each row's neighbours along the boundary, -1 for none), when
+    its distance is not a local minimum along the boundary (the module's note on edge
+    rows).
+    """
+    e = xb - xa
+    L2 = np.einsum("ij,ij->i", e, e)
+    c = C[:, :2]
+    s_raw = np.einsum("ij,ij->i", c - xa, e) / L2
+    s = np.clip(s_raw, 0.0, 1.0)
+    L = np.sqrt(L2)
+    inward = np.stack([-e[:, 1], e[:, 0]], 1) / L[:, None]
+    front = -np.einsum("ij,ij->i", c - xa, inward) > 0.0
+    f = xa + s[:, None] * e
+    r = f - c
+    d = np.hypot(r[:, 0], r[:, 1])
+    on = front & (d > 0)
+    if prev is not None:
+        # a local minimum of the distance along the boundary: a foot inside the edge, or
+        # the end vertex when the next edge's foot clamps to it too (a convex corner);
+        # a foot clamped to the start vertex belongs to the previous edge
+        s_next = np.where(nxt >= 0, s_raw[np.maximum(nxt, 0)], 0.0)
+        on &= ((s_raw > 0.0) & (s_raw < 1.0)) | ((s_raw >= 1.0) & (s_next <= 0.0))
+    m = np.where(on[:, None], r / np.where(d > 0, d, 1.0)[:, None], 0.0)
+    g = np.where(on, d - C[:, 2], off)
+    k = len(e)
+    J = np.zeros((k, 2, 4))
+    J[:, 0, 0] = J[:, 1, 1] = 1.0 - s
+    J[:, 0, 2] = J[:, 1, 3] = s
+    Je = np.einsum("kij,ki->kj", J, e)                            # Jᵀe, (k, 4)
+    w = np.concatenate([-m, m], axis=1)
+    H = -(Je[:, :, None] * w[:, None, :] + w[:, :, None] * Je[:, None, :]) / L2[:, None, None] \
+        - (d / L2)[:, None, None] * (w[:, :, None] * w[:, None, :])
+    for end, blk in ((on & (s_raw >= 1.0), slice(2, 4)), (on & (s_raw <= 0.0), slice(0, 2))):
+        if end.any():
+            P = np.eye(2)[None] - m[end][:, :, None] * m[end][:, None, :]
+            He = np.zeros((int(end.sum()), 4, 4))
+            He[:, blk, blk] = P / d[end][:, None, None]
+            H[end] = He
+    H[~on] = 0.0
+    return g, m, np.where(on, s, 0.0), H
+
+
+def _row_gradients(n: np.ndarray, s: np.ndarray, rn: int) -> np.ndarray:
+    """The rows' gradient entries in the order of :class:`_KKTPattern`: a node row's
+    normal, an edge row's ``[(1 − s) m, s m]``."""
+    ne = n[rn:]
+    edge = np.concatenate([(1.0 - s)[:, None] * ne, s[:, None] * ne], axis=1)
+    return np.concatenate([n[:rn].ravel(), edge.ravel()])
+
+
+def _csr_positions(K: sp.csr_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Positions in ``K.data`` of the entries ``(rows, cols)`` (same shape); ValueError
+    when one is not in the pattern."""
+    out = np.empty(rows.shape, np.int64)
+    for idx in np.ndindex(rows.shape):
+        lo, hi = K.indptr[rows[idx]], K.indptr[rows[idx] + 1]
+        hit = np.flatnonzero(K.indices[lo:hi] == cols[idx])
+        if len(hit) != 1:
+            raise ValueError("tangent without the rows' node blocks")
+        out[idx] = lo + hit[0]
+    return out
+
+
 class _KKTPattern:
     """The fixed sparsity pattern of the Newton system of :class:`FiniteStrainContact`, in
     the solver's nested-dissection order (CSC), and where each value goes: the tangent's
     CSR values, the rows' gradients (twice, the matrix is symmetric), the gauge and the
     multipliers' diagonal. Built once per tangent pattern; :meth:`matrix` fills it."""
 
-    def __init__(self, Kt: sp.csr_matrix, node: np.ndarray, G: sp.csr_matrix,
-                 order: np.ndarray) -> None:
+    def __init__(self, Kt: sp.csr_matrix, node: np.ndarray, edge: np.ndarray,
+                 G: sp.csr_matrix, order: np.ndarray) -> None:
         Kt = Kt.tocsr()
-        nd, r = Kt.shape[0], len(node)
+        rn, re = len(node), len(edge)
+        nd, r = Kt.shape[0], rn + re
         self.indptr_K, self.indices_K = Kt.indptr.copy(), Kt.indices.copy()
         nK = Kt.nnz
         # ids (1-based, so no value is dropped as a zero) of every source value
         K_ids = sp.csr_matrix((np.arange(1, nK + 1, dtype=float), Kt.indices, Kt.indptr),
                               shape=(nd, nd))
-        jr = np.repeat(np.arange(r), 2)
-        jc = np.stack([2 * node, 2 * node + 1], 1).ravel()
+        # the rows' gradient entries: a node row's 2 DOFs, an edge row's 4 (its two nodes)
+        edofs = np.stack([2 * edge[:, 0], 2 * edge[:, 0] + 1, 2 * edge[:, 1], 2 * edge[:, 1] + 1], 1)
+        jr = np.concatenate([np.repeat(np.arange(rn), 2), np.repeat(np.arange(rn, r), 4)])
+        jc = np.concatenate([np.stack([2 * node, 2 * node + 1], 1).ravel(), edofs.ravel()])
+        self.entry_row = jr
+        ne = len(jr)
         base_jl = nK + 1
-        Jl = sp.csr_matrix((np.arange(base_jl, base_jl + 2 * r, dtype=float), (jr, jc)),
+        Jl = sp.csr_matrix((np.arange(base_jl, base_jl + ne, dtype=float), (jr, jc)),
                            shape=(r, nd))
-        base_ju = base_jl + 2 * r
-        Ju = sp.csr_matrix((np.arange(base_ju, base_ju + 2 * r, dtype=float), (jr, jc)),
+        base_ju = base_jl + ne
+        Ju = sp.csr_matrix((np.arange(base_ju, base_ju + ne, dtype=float), (jr, jc)),
                            shape=(r, nd))
         Gd = np.asarray(G.todense())
-        base_g = base_ju + 2 * r
+        base_g = base_ju + ne
         gl = (np.arange(Gd.size, dtype=float) + base_g).reshape(Gd.shape)
         base_gu = base_g + Gd.size
         gu = (np.arange(Gd.size, dtype=float) + base_gu).reshape(Gd.shape)
@@ -492,33 +764,32 @@ class _KKTPattern:
         self.pos_D = np.flatnonzero((ids >= base_d) & (ids < base_z))
         self.src_D = ids[self.pos_D] - base_d
         self.pos_Z = np.flatnonzero(ids >= base_z)
-        # where each row's node's 2×2 diagonal block sits in the tangent's CSR values
-        blocks = np.empty((r, 4), np.int64)
-        for q, (di, dj) in enumerate(((0, 0), (0, 1), (1, 0), (1, 1))):
-            row, col = 2 * node + di, 2 * node + dj
-            for j in range(r):
-                lo, hi = Kt.indptr[row[j]], Kt.indptr[row[j] + 1]
-                hit = np.flatnonzero(Kt.indices[lo:hi] == col[j])
-                if len(hit) != 1:
-                    raise ValueError("tangent without the nodes' diagonal blocks")
-                blocks[j, q] = lo + hit[0]
-        self.blocks = blocks
+        # where each node row's 2×2 diagonal block, and each edge row's 4×4 block over its
+        # two nodes (an edge of the mesh: the tangent has its off-diagonal blocks), sit in
+        # the tangent's CSR values
+        rows_n = np.stack([2 * node, 2 * node, 2 * node + 1, 2 * node + 1], 1)
+        cols_n = np.stack([2 * node, 2 * node + 1, 2 * node, 2 * node + 1], 1)
+        self.blocks = _csr_positions(Kt, rows_n, cols_n)
+        self.eblocks = _csr_positions(Kt, np.repeat(edofs, 4, axis=1), np.tile(edofs, (1, 4)))
 
     def fits(self, Kt: sp.csr_matrix) -> bool:
         """Whether ``Kt`` has the pattern this was built for."""
         return (Kt.nnz == len(self.indices_K) and np.array_equal(Kt.indptr, self.indptr_K)
                 and np.array_equal(Kt.indices, self.indices_K))
 
-    def matrix(self, K_data: np.ndarray, curv: np.ndarray, n: np.ndarray,
-               active: np.ndarray) -> sp.csc_matrix:
+    def matrix(self, K_data: np.ndarray, curv: np.ndarray, ecurv: np.ndarray,
+               grads: np.ndarray, active: np.ndarray) -> sp.csc_matrix:
         """The upper triangle (CSC) of the Newton matrix: tangent values ``K_data`` plus the
-        rows' curvature blocks ``curv`` (r, 2, 2), gradients ``n`` (r, 2) of the active
+        node rows' curvature blocks ``curv`` (r_n, 2, 2) and the edge rows' ``ecurv``
+        (r_e, 4, 4), the gradient entries ``grads`` (:func:`_row_gradients`) of the active
         rows."""
         Kd = np.array(K_data, float)
         np.add.at(Kd, self.blocks.ravel(), curv.reshape(-1))
+        if len(ecurv):
+            np.add.at(Kd, self.eblocks.ravel(), ecurv.reshape(-1))
         data = np.empty(self.nnz)
         data[self.pos_K] = Kd[self.src_K]
-        nv = np.where(active[:, None], -n, 0.0).ravel()
+        nv = np.where(active[self.entry_row], -grads, 0.0)
         data[self.pos_Jl] = nv[self.src_Jl]
         data[self.pos_Ju] = nv[self.src_Ju]
         data[self.pos_G] = self.val_G
@@ -601,7 +872,7 @@ class SqueezePath:
 
 def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], list],
                    targets: Sequence[float], start: ContactState | None = None,
-                   start_delta: float = 0.0) -> SqueezePath:
+                   start_delta: float = 0.0, monotone: bool = True) -> SqueezePath:
     """Follow the contact equilibrium through the squeezes ``targets`` (m, increasing).
 
     Each target is reached from the previous converged state in one step, halved (and
@@ -621,13 +892,17 @@ def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], li
         A converged state at ``start_delta`` (default: the unloaded part, ``u = 0``).
     start_delta : float
         Squeeze (m) of ``start``.
+    monotone : bool
+        The bodies only push deeper as δ grows, so a converged state of lower energy than
+        the last is another branch (default). False for a path that may also release
+        (e.g. a part moved among fixed fingers, δ the fraction of the move).
 
     Returns
     -------
     SqueezePath
         States at the targets reached (intermediate states of halved steps are not kept).
     """
-    nd, r, k = problem.n_dofs, len(problem.node), problem.G.shape[0]
+    nd, r, k = problem.n_dofs, problem.n_rows, problem.G.shape[0]
     if start is None:
         state = ContactState(np.zeros(nd), np.zeros(r), np.zeros(k), 0.0, np.zeros(r),
                              np.zeros((r, 2)), 0.0, 0, True)
@@ -656,7 +931,7 @@ def follow_squeeze(problem: FiniteStrainContact, bodies_at: Callable[[float], li
             if not trial.converged and u0 is not state.u:
                 trial = problem.solve(bodies_at(d_try), state.u, state.lam, state.mu)
                 solves += 1
-            if trial.converged and trial.energy < state.energy * (1 - 1e-9):
+            if monotone and trial.converged and trial.energy < state.energy * (1 - 1e-9):
                 # the squeeze only adds energy (the bodies push: dU/dδ ≥ 0); a converged
                 # state below the last one is another equilibrium branch: a smaller step
                 trial.converged = False

@@ -232,15 +232,18 @@ class PlacementLandscape:
         return -float(np.linalg.norm(self.pe.centroid + g[:2] - self._hub))
 
     def search(self, start: Key, step: int, noise: float, *, goal: Key | None = None,
-               box: tuple[Key, int] | None = None, stop_above: float | None = None) -> Escape:
+               box: tuple[Key, int] | None = None, stop_above: float | None = None,
+               allowed: set | None = None) -> Escape:
         """Minimax (bottleneck) path from ``start`` on the lattice of ``step``
         (:func:`~deformclosure.landscape.search.minimax_escape` on this lattice).
 
         With ``goal`` the path ends there; otherwise at the first target (released or
         another equilibrium beyond the relative noise floor ``noise``, module docstring).
         ``box = (centre, half_width)`` restricts the search; ``stop_above`` (J) stops once
-        the barrier above the start exceeds it. The result's ``plateau`` is the extent
-        (finest units) of the start's noise plateau.
+        the barrier above the start exceeds it; ``allowed``, a set of keys, restricts
+        where the search expands (a sub-landscape; its equilibria are still tested against
+        every lattice neighbour). The result's ``plateau`` is the extent (finest units) of
+        the start's noise plateau.
         """
         g = self.grid
 
@@ -248,6 +251,8 @@ class PlacementLandscape:
             out = [g.norm(w) for w in g.neighbours(v, step)]
             if box is not None:
                 out = [w for w in out if g.distance(w, box[0]) <= box[1]]
+            if allowed is not None:
+                out = [w for w in out if w in allowed]
             return out
 
         return minimax_escape(
@@ -256,7 +261,12 @@ class PlacementLandscape:
             goal=None if goal is None else g.norm(goal), noise=noise,
             confirm=lambda v: self.energy(v) > 0.0 and self.is_equilibrium(v, step, noise),
             stop_above=stop_above, max_evaluations=self.max_evaluations,
-            evaluated=lambda: self.n_evaluated, priority=self._priority, distance=g.distance)
+            evaluated=self.spent, priority=self._priority, distance=g.distance)
+
+    def spent(self) -> int:
+        """The budget count the search compares with ``max_evaluations``: the placements
+        solved (a landscape with a time budget counts it spent past its deadline)."""
+        return self.n_evaluated
 
     def is_equilibrium(self, v: Key, step: int, noise: float) -> bool:
         """Whether lattice vertex ``v`` (a minimum over its six axis neighbours) is an
@@ -302,7 +312,7 @@ class PlacementLandscape:
         for k in keys:
             if k not in self._twin_E:
                 self._twin_E[k] = self.twin.energy(self.grid.placement(k)).energy
-        keys = [k for k in self._twin_E if self._E[k] >= floor]
+        keys = [k for k in self._twin_E if self._E[k] >= floor and math.isfinite(self._twin_E[k])]
         E1 = np.array([self._E[k] for k in keys])
         E2 = np.array([self._twin_E[k] for k in keys])
         return twin_floor(E1, E2)
@@ -404,6 +414,13 @@ class FingerRelease:
         At rest (``E* = 0``) with the rigid part in form closure: ``U_A > 0`` is certain
         (Thm 1), so ``deform_closure`` is ``U_A > 0`` and the noise floor does not zero
         ``U_A`` (SPEC §7).
+    coarse_path : tuple of Key
+        The coarse lattice's escape path (keys of :attr:`grid`), before the refinement
+        near the saddle: the sub-landscape the finite-strain model re-solves
+        (:mod:`.finite_strain_release`).
+    twin_mesh : Mesh or None
+        The second mesh realisation the noise floor was measured on (None without one):
+        the finite-strain model measures its own floor on it.
 
     Examples
     --------
@@ -442,6 +459,8 @@ class FingerRelease:
     contact_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
     warnings: tuple = ()
     by_theorem1: bool = False
+    coarse_path: tuple = field(default=(), repr=False)
+    twin_mesh: Any = field(default=None, repr=False)
 
     @property
     def U_A_infinite(self) -> bool:
@@ -758,7 +777,8 @@ def _release(mesh: Any, fingers: tuple[Finger, ...], *, part: Any, solver: Any, 
         critical_distance=float(ell), e_L=e_L, n_evaluations=land.n_evaluated, complete=bool(res.complete),
         seconds=time.perf_counter() - t0, centroid=pe.centroid.copy(), contact_forces=start_state.forces,
         contact_points=start_state.points, warnings=_point_finger_notes(start_state, fingers, Es),
-        by_theorem1=thm1)
+        by_theorem1=thm1, coarse_path=tuple(res.path),
+        twin_mesh=None if land.twin is None else land.twin.mesh)
 
 
 def _start_placement(pe: PlacementEnergy, start: Any) -> np.ndarray:
@@ -819,11 +839,12 @@ def _strict_at_rest(pe: PlacementEnergy, gstar: np.ndarray, Es: float, rigid_clo
     return bool(rigid_closed)
 
 
-def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float | None) -> tuple[Escape, float]:
-    """The coarse minimax search, repeated while the noise floor measured by the twin on
-    the placements it settled rises. Returns the search and the noise floor."""
+def _minimax(land: PlacementLandscape, Es: float, tau: float, stop_above: float | None,
+             start: Key = _ORIGIN) -> tuple[Escape, float]:
+    """The coarse minimax search from ``start``, repeated while the noise floor measured
+    by the twin on the placements it settled rises. Returns the search and the floor."""
     for _ in range(4):
-        res = land.search(_ORIGIN, land.grid.scale, tau, stop_above=stop_above)
+        res = land.search(start, land.grid.scale, tau, stop_above=stop_above)
         if land.twin is None:
             break
         new = land.twin_noise(res.settled, 0.5 * Es)

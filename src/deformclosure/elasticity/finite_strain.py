@@ -17,7 +17,8 @@ import numpy as np
 
 from .critical_distance import disc_average
 
-__all__ = ["stretch_magnitudes", "averaged_stretch_magnitudes", "averaged_stretch_maximum"]
+__all__ = ["stretch_magnitudes", "averaged_stretch_magnitudes", "averaged_stretch_maximum",
+           "law_strain_maximum"]
 
 #: Rows averaged first (those of the largest element magnitudes) before pruning by the bound.
 SEED_ROWS = 16
@@ -80,3 +81,17 @@ def averaged_stretch_maximum(mesh, C: np.ndarray, ell: float) -> tuple[float, in
         if avg[k] > best:
             best, where = float(avg[k]), int(rows[k])
     return best, where
+
+
+def law_strain_maximum(mesh, law, u: np.ndarray, ell: float) -> float:
+    """The strain compared with ``e_L`` of displacement ``u`` (m) under the material law
+    ``law`` of the finite-strain solver: SPEC §8's averaged stretch magnitude
+    (:func:`averaged_stretch_maximum`), or SPEC §6's averaged strain magnitude for the
+    small-strain law (:class:`~deformclosure.elasticity.linear_energy.LinearEnergy`).
+    ``ell``: the critical distance (m)."""
+    from .critical_distance import averaged_strain_maximum
+    from .linear_energy import LinearEnergy
+
+    if isinstance(law, LinearEnergy):
+        return float(averaged_strain_maximum(mesh, law.small_strains(u), ell))
+    return float(averaged_stretch_maximum(mesh, law.right_cauchy_green(u), ell)[0])

@@ -52,7 +52,17 @@ from .stiffness import _gradients, _Pattern
 if TYPE_CHECKING:
     from ..mesh import Mesh
 
-__all__ = ["NeoHookean", "lame_constants"]
+__all__ = ["NeoHookean", "lame_constants", "material_law"]
+
+
+def material_law(mesh, elasticity: str):
+    """The material law ``elasticity`` (``"neo-hookean"``, or ``"linear"``: the
+    small-strain energy) of ``mesh``'s material, behind the interface of the finite-strain
+    contact solver (:mod:`deformclosure.contact.large_deformation`)."""
+    if elasticity == "linear":
+        from .linear_energy import LinearEnergy
+        return LinearEnergy(mesh)
+    return NeoHookean(mesh)
 
 
 def lame_constants(material: Material) -> tuple[float, float]:

@@ -225,6 +225,43 @@ def minimax_escape(start: V, neighbours: Callable[[V], Iterable[V]],
     return Escape(math.inf, [], None, True, settled, level, E, plateau)
 
 
+def cut_level(esc: Escape, full: Callable[[V], Iterable[V]],
+              energy: Callable[[V, V], float]) -> float:
+    """The lowest level (J) at which a path of the *full* graph can leave the vertices a
+    search on a sub-graph settled: ``min over the edges v → w, v settled, w a full-graph
+    neighbour the search did not settle, of max(level(v), U(w))``, an infinite ``U(w)``
+    counted as ``level(v)`` (unreachable is not infinitely high); ``inf`` when no such
+    edge exists.
+
+    A lower bound of the full graph's barrier follows (SPEC §8, a sub-landscape re-solved
+    at finite strain): the search settled the set ``S`` in increasing level below its
+    final level ``b`` and found no target in it, so a path to a target either stays in
+    the sub-graph (it climbs at least ``b``) or leaves ``S`` by a cut edge ``v → w`` (it
+    climbs at least ``U(w)``, and at least ``level(v)`` to reach ``v``); the barrier is
+    at least ``min(b, cut_level) − U(start)``.
+
+    Parameters
+    ----------
+    esc : Escape
+        The sub-graph search (its ``settled`` vertices and their ``levels``).
+    full : callable
+        ``full(v)``: the full graph's neighbours of ``v``.
+    energy : callable
+        ``energy(w, v)``: the energy (J) of ``w``, solved from ``v``'s state.
+    """
+    S = set(esc.settled)
+    out = math.inf
+    for v in esc.settled:
+        lv = esc.levels[v]
+        if lv >= out:
+            continue                        # no edge from v can lower the bound
+        for w in full(v):
+            if w not in S:
+                Uw = energy(w, v)
+                out = min(out, max(lv, Uw) if math.isfinite(Uw) else lv)
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class DissipativeEscape:
     """Result of :func:`dissipative_escape`.

@@ -28,12 +28,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from ..landscape.noise import higher, resolved, twin_floor
-from ..landscape.search import minimax_escape
+from ..landscape.search import cut_level, minimax_escape
 from .contact import GraspCurve, PadContact
 from .geometry import GraspAxis, Pad
 
@@ -165,25 +164,6 @@ class Release:
     path: list[int]
     bounded: bool = False
     lower: float | None = None
-
-
-def _cut_level(esc, full: Callable[[int], list[int]], U: Callable[[int, int], float]
-               ) -> float:
-    """``min over the edges v → w, v settled, w a full-grid neighbour the search did not
-    settle, of max(level(v), U(w))`` (J), with an infinite ``U(w)`` counted as
-    ``level(v)``; ``inf`` when no such edge exists (:meth:`Landscape.release`'s
-    ``cut_bound``). ``U(w, v)``: the energy of ``w`` solved from ``v``'s state."""
-    S = set(esc.settled)
-    out = math.inf
-    for v in esc.settled:
-        lv = esc.levels[v]
-        if lv >= out:
-            continue                        # no edge from v can lower the bound
-        for w in full(v):
-            if w not in S:
-                Uw = U(w, v)
-                out = min(out, max(lv, Uw) if math.isfinite(Uw) else lv)
-    return out
 
 
 class Landscape:
@@ -369,7 +349,7 @@ class Landscape:
                                                 confirm=confirm)
         lower = None
         if cut_bound and full is not None:
-            lower = min(esc.barrier, _cut_level(esc, full, U)) - Us
+            lower = min(esc.barrier, cut_level(esc, full, U)) - Us
         if not esc.complete:
             return Release(esc.barrier - Us, True, None, [], bounded=True, lower=lower)
         if esc.target is None:

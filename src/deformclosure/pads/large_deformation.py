@@ -28,25 +28,16 @@ import numpy as np
 from ..contact.compliance import gauge_functionals
 from ..contact.large_deformation import (CapsuleObstacle, ContactState, FiniteStrainContact,
                                          follow_squeeze)
-from ..elasticity.critical_distance import (averaged_strain_magnitude, averaged_strain_maximum,
-                                             critical_distance_of)
-from ..elasticity.finite_strain import averaged_stretch_magnitudes, averaged_stretch_maximum
+from ..elasticity.critical_distance import averaged_strain_magnitude, critical_distance_of
+from ..elasticity.finite_strain import averaged_stretch_magnitudes, law_strain_maximum
 from ..elasticity.linear_energy import LinearEnergy
+from ..elasticity.neohookean import material_law
 from .geometry import FirstTouch, GraspAxis, Pad, first_touch
 
 __all__ = ["FiniteStrainPads", "FiniteStrainCurve", "material_law"]
 
 #: Squeeze steps (fraction of the first-touch width σ0) of the first trace of an axis.
 STEP_FRACTION = 1.0 / 16.0
-
-
-def material_law(mesh, elasticity: str):
-    """The material law ``elasticity`` ("neo-hookean" or "linear") of ``mesh``'s material
-    behind the finite-strain solver's interface."""
-    if elasticity == "linear":
-        return LinearEnergy(mesh)
-    from ..elasticity.neohookean import NeoHookean
-    return NeoHookean(mesh)
 
 
 class FiniteStrainCurve:
@@ -279,10 +270,7 @@ class FiniteStrainCurve:
             return math.inf
         mesh = self.owner.mesh
         ell = critical_distance_of(mesh) if ell is None else ell
-        law = self.owner.law
-        if isinstance(law, LinearEnergy):      # the small-strain law: SPEC §6's measure
-            return float(averaged_strain_maximum(mesh, law.small_strains(st.u), ell))
-        return averaged_stretch_maximum(mesh, law.right_cauchy_green(st.u), ell)[0]
+        return law_strain_maximum(mesh, self.owner.law, st.u, ell)
 
     def strain_field(self, sigma: float, ell: float | None = None) -> np.ndarray:
         """Per element, the averaged strain magnitude (m/m) whose maximum is

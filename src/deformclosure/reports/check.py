@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DeformClosureError, GraspError
+from ..errors import DeformClosureError
 from .base import Report, provenance, write_report
 from .inputs import read_inputs, source_of
 
@@ -78,10 +78,6 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
     p = params
     _check_params(p)
     check_animate(p)
-    if p.get("elasticity") == "neo-hookean":
-        raise GraspError("--elasticity neo-hookean: not supported by check yet (finite strain, "
-                         "SPEC §8, covers pads on a grasp axis: optimize and plan); use "
-                         "--elasticity linear")
     check_accuracy(p.get("rtol"), p.get("max_seconds"))
     check_refine(p.get("refine"))
     fsrc = source_of(p["fingers"], "finger file")
@@ -90,6 +86,10 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
                       points=lambda prt: contact_points(prt, fingers))
     inp.sources.insert(1, fsrc)
     check_finger_sizes(fingers, inp.mesh.diameter)
+    elasticity = p.get("elasticity") or getattr(inp.mesh.material, "model", "linear")
+    if elasticity == "neo-hookean":
+        for i, f in enumerate(fingers):          # refused before any work (one line)
+            f.obstacle(f"fingers[{i}]")
     # at most two factorised meshes at once: the release landscape's and its twin's (the
     # rigid test's is released before them; measured, benchmarks/bench_memory.py)
     with holding(PLACEMENT_KERNEL_BYTES):
@@ -117,12 +117,19 @@ def run(part, params: dict, progress=None, notify=None) -> Report:
         levels = _refined(inp, fingers, solve, rtol, refine, p.get("max_seconds"), notify)
     mesh, res, rel = levels[-1][:3]
     inp.mesh = mesh
+    finite = []
+    if elasticity == "neo-hookean":
+        finite = _finite_strain(levels, fingers, p, notify)
+        rel = finite[-1]
     data = {**merge_release(res.to_dict(), res, rel), "provenance": provenance(inp.sources)}
+    data.setdefault("elasticity", "linear")
     lines, warnings = _lines(mesh, fingers, res, rel)
     if len(levels) > 1 or rtol is not None:
         more_lines, more = _refinement_lines(data, levels, rtol)
         lines += more_lines
         warnings += more
+    if finite:
+        lines += _finite_strain_lines(data, levels, finite)
     return Report("check", data, lines, inp.warnings + acc_warnings + warnings, p,
                   (res, rel, fingers, inp),
                   _writer)
@@ -186,6 +193,53 @@ def _refined(inp, fingers, solve, rtol: float | None, refine: int | None,
     if rtol is not None:
         levels[-1] += (f"{n_levels} levels solved",)
     return levels
+
+
+def _finite_strain(levels, fingers, p: dict, notify) -> list:
+    """The finite-strain release (SPEC §8, :mod:`deformclosure.dspace.finite_strain_release`)
+    on the finest level and the one before it (their difference is the mesh part of its
+    error estimate)."""
+    from ..dspace.finite_strain_release import finite_strain_release
+
+    from ..pads.refine import DEFAULT_MAX_SECONDS
+
+    budget = DEFAULT_MAX_SECONDS if p.get("max_seconds") is None else float(p["max_seconds"])
+    last = levels[-2:]
+    return [finite_strain_release(lv[0], fingers, lv[2], levels=p["saddle_levels"],
+                                  max_seconds=budget / len(last), say=notify)
+            for lv in last]
+
+
+def _finite_strain_lines(data: dict, levels, finite: list) -> list[str]:
+    """Add ``finite_strain_levels`` and ``finite_strain_error`` to ``data``; the lines."""
+    import math
+
+    from ..pads.refine import level_error
+
+    num = lambda v: None if not math.isfinite(v) else float(v)  # noqa: E731
+    first = len(levels) - len(finite)
+    data["finite_strain_levels"] = [
+        {"level": first + k, "nodes": lv[0].n_nodes, "U_A": num(fs.U_A),
+         "U_A_infinite": math.isinf(fs.U_A), "U_A_lower": num(fs.U_A_lower),
+         "quality": num(fs.quality), "deform_closure": fs.deform_closure}
+        for k, (lv, fs) in enumerate(zip(levels[first:], finite))]
+    est = level_error([fs.U_A for fs in finite]) if len(finite) > 1 else None
+    data["finite_strain_error"] = {"U_A": None if est is None else num(est + finite[-1].U_A_error)}
+    fs = finite[-1]
+    err = data["linear_model_error"]
+    pct = lambda v: "-" if v is None else f"{v:+.1%}"  # noqa: E731
+    found = (f"U_A = {_joules(fs.U_A)} (the whole lattice searched)" if fs.exact else
+             f"U_A <= {_joules(fs.U_A)} (found path), >= {_joules(fs.U_A_lower)} (certified)")
+    lines = [f"finite strain ({fs.elasticity}): {found}; linear U_A = {_joules(fs.linear.U_A)}; "
+             f"{fs.n_evaluations} placements solved in {fs.seconds:.1f} s",
+             f"linear model error at this grasp: U {pct(err['U'])}, F {pct(err['F'])}, "
+             f"quality {pct(err['quality'])}"]
+    if len(finite) > 1:
+        e = data["finite_strain_error"]["U_A"]
+        lines.append("finite-strain U_A on the last two levels: "
+                     + ", ".join(_joules(f.U_A) for f in finite)
+                     + f"; error estimate ± {'-' if e is None else f'{e:.3g} J'}")
+    return lines
 
 
 def _pressing_points(rel) -> bool:
@@ -364,6 +418,9 @@ def _verdict(rel) -> str:
     if rel.deform_closure and rel.by_theorem1:
         return ("HELD (deform closure at rest: the rigid part is in form closure, so every exit "
                 "deforms it and U_A > 0, Thm 1)")
+    if rel.deform_closure and getattr(rel, "elasticity", "linear") != "linear":
+        return ("HELD (deform closure at finite strain: the certified lower bound of U_A "
+                "exceeds its error)")
     if rel.deform_closure:
         return "HELD (deform closure: U_A exceeds its error)"
     if rel.caged:
