@@ -224,7 +224,7 @@ def test_convex_block_between_frictionless_discs_is_not_held(tmp_path):
     d = rep.data
     assert d["elasticity"] == "neo-hookean"
     assert d["release"]["equilibrium_energy"] > 0
-    assert not d["deform_closure"] and d["U_A"] == 0.0
+    assert not d["deform_closure"] and d["U_A"] == 0.0 and d["finite_strain_verdict"] == "not held"
     assert d["U_A_is_upper_bound"] is False and d["release"]["finite_strain_search"] == "whole lattice"
     assert set(d["linear_model_error"]) == {"U", "F", "quality", "sigma_star"}
     assert d["linear"]["deform_closure"] is False
@@ -243,7 +243,7 @@ def test_budgeted_searches_bracket_one_value():
     lin = release_energy_fingers(mesh, fingers, part=part, rigid_closed=True, levels=0)
     runs = [finite_strain_release(mesh, fingers, lin, levels=0, max_evaluations=b) for b in (40, 240)]
     for r in runs:
-        assert not r.exact and r.deform_closure
+        assert not r.exact and r.deform_closure and r.verdict == "held"
         assert 0 < r.U_A_lower <= r.U_A
     assert max(r.U_A_lower for r in runs) <= min(r.U_A for r in runs)
     assert runs[1].U_A_lower >= runs[0].U_A_lower * (1 - 1e-12)
@@ -260,3 +260,17 @@ def test_check_refuses_fingers_without_finite_strain_contact(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "Traceback" not in err
     assert "fingers[0]" in err and "polygon finger" in err and len(err.strip().splitlines()) == 1
+
+
+def test_transfer_operator_carries_a_linear_field_exactly():
+    """The twin mesh gets the landscape's state by linear interpolation: a linear field
+    is carried exactly to every twin node inside the mesh, and to within the boundary's
+    discretisation elsewhere."""
+    from deformclosure.dspace.finite_strain_release import transfer_operator
+    from deformclosure.mesh.generate import twin_mesh
+
+    part = _part([(0, 0), (12, 0), (12, 20), (0, 20)], 4.0, RUBBER)
+    mesh, twin = mesh_part(part), twin_mesh(part)
+    f = lambda X: np.column_stack([0.3 * X[:, 0] - 0.1 * X[:, 1] + 1e-3, 0.2 * X[:, 1]])  # noqa: E731
+    out = transfer_operator(mesh, twin) @ f(mesh.nodes)
+    assert np.allclose(out, f(twin.nodes), atol=1e-12 + 1e-9 * np.abs(f(twin.nodes)).max())

@@ -311,11 +311,16 @@ class PlacementLandscape:
             keys = [keys[int(i)] for i in np.linspace(0, len(keys) - 1, most)]
         for k in keys:
             if k not in self._twin_E:
-                self._twin_E[k] = self.twin.energy(self.grid.placement(k)).energy
+                self._twin_E[k] = self._twin_energy(k)
         keys = [k for k in self._twin_E if self._E[k] >= floor and math.isfinite(self._twin_E[k])]
         E1 = np.array([self._E[k] for k in keys])
         E2 = np.array([self._twin_E[k] for k in keys])
         return twin_floor(E1, E2)
+
+
+    def _twin_energy(self, key: Key) -> float:
+        """The twin realisation's energy (J) at ``key``."""
+        return self.twin.energy(self.grid.placement(key)).energy
 
 
 def jitter_noise(pe: PlacementEnergy, g: np.ndarray, h: float, h_phi: float, E0: float,

@@ -415,6 +415,13 @@ def _target(rel) -> str:
 
 
 def _verdict(rel) -> str:
+    if getattr(rel, "verdict", None) == "undecided" and rel.U_A == 0.0:
+        return (f"UNDECIDED at finite strain (a climb of {rel.barrier:.4g} J lies within the "
+                f"noise floor {rel.noise_relative:.0%}: this mesh does not resolve it; refine)")
+    if getattr(rel, "verdict", None) == "undecided":
+        return (f"UNDECIDED at finite strain (U_A between {rel.U_A_lower:.4g} J and "
+                f"{_joules(rel.U_A)}, error {rel.U_A_error:.3g} J: the search's budget ran "
+                "out; raise --max-seconds)")
     if rel.deform_closure and rel.by_theorem1:
         return ("HELD (deform closure at rest: the rigid part is in form closure, so every exit "
                 "deforms it and U_A > 0, Thm 1)")
