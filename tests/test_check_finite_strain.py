@@ -190,7 +190,8 @@ def _rest_sets():
     }
 
 
-@pytest.mark.parametrize("name", list(_rest_sets()))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if "(held)" in n else n
+                                  for n in _rest_sets()])
 def test_at_rest_the_finite_strain_verdict_is_the_rigid_test(name):
     """Thm 1 (SPEC §7) at finite strain: nothing squeezed, so deform closure is the rigid
     form-closure test; a held set is decided on the certified lower bound even when the

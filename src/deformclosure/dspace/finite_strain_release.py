@@ -52,7 +52,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -348,94 +348,47 @@ class FiniteStrainLandscape(PlacementLandscape):
 
 
 @dataclass(frozen=True, eq=False)
-class FiniteStrainFingerRelease:
-    """A finger set's release at finite strain (SPEC §7, §8), SI units.
+class FiniteStrainFingerRelease(FingerRelease):
+    """A finger set's release at finite strain (SPEC §7, §8): a
+    :class:`.escape.FingerRelease` whose fields hold the finite-strain values, SI units.
+
+    ``U_A`` is the lattice's finite-strain release energy when :attr:`exact`, else the
+    barrier of the path found on the sub-landscape, an upper bound (``inf``: no target
+    reachable); ``deform_closure`` is decided on :attr:`U_A_lower`; ``equilibrium`` is the
+    finite-strain start placement; ``U_L`` follows the fingers pushed deeper (module
+    docstring, 5); ``strain`` is SPEC §8's measure at the start; ``noise_relative`` the
+    twin mesh's floor at finite strain, at least the linear model's.
 
     Attributes
     ----------
     elasticity : str
     linear : FingerRelease
-        The linear model on the same mesh and lattice (it found the escape path).
-    U_A : float
-        The finite-strain release energy (J) of the lattice when :attr:`exact`, else the
-        barrier of the path found on the sub-landscape, an upper bound (``inf``: no target
-        reachable).
+        The linear model on the same mesh and lattice.
     U_A_lower : float
-        A certified lower bound (J) of it (module docstring, 3; equal to ``U_A`` when
+        A certified lower bound (J) of ``U_A`` (module docstring, 3; equal to it when
         :attr:`exact`).
-    U_A_error : float
-        Lattice changes near the saddle plus the noise floor at the saddle (J).
-    deform_closure, strict, caged, by_theorem1 : bool
-        As :class:`.escape.FingerRelease`, decided on ``U_A_lower``.
-    equilibrium : ndarray (3,)
-        The finite-strain start placement (m, m, rad).
-    energy : float
-        Its energy (J).
-    path, path_energy, saddle, target
-        The escape path (placements), its energies (J), the saddle's index, the target.
-    U_L, quality, strain : float
-        Elastic limit work (J), ``min(U_A, U_L)`` when held (J), SPEC §8's strain at the
-        start.
     U_L_reached : bool
-        Whether the load path reached ``e_L`` (else ``U_L`` is the work to where it stopped,
-        a lower bound).
+        Whether the load path reached ``e_L`` (else ``U_L`` is the work to where it
+        stopped, a lower bound).
     contact_force : float
         Sum of the contact forces' magnitudes at the start (N).
-    n_evaluations, n_failed : int
-        Placements solved at finite strain, and those that could not be reached.
-    seconds : float
-    complete : bool
-        The search that found the path finished.
+    n_failed : int
+        Placements that could not be solved (inadmissible).
     exact : bool
-        The whole-lattice search finished within its budget: ``U_A`` is the lattice's.
-    noise_relative : float
-        The relative noise floor: the twin mesh's at finite strain, at least the linear
-        model's.
+        The whole-lattice search finished within its budget.
     barrier : float
         The found path's climb above the start (J) before the noise floor is applied
         (``U_A`` is 0 when the floor does not resolve it).
     """
 
-    elasticity: str
-    linear: FingerRelease
-    U_A: float
-    U_A_lower: float
-    U_A_error: float
-    deform_closure: bool
-    strict: bool
-    caged: bool
-    by_theorem1: bool
-    equilibrium: np.ndarray
-    energy: float
-    path: np.ndarray
-    path_energy: np.ndarray
-    saddle: int | None
-    target: str | None
-    U_A_levels: list
-    U_L: float
-    U_L_reached: bool
-    quality: float
-    strain: float
-    contact_force: float
-    n_evaluations: int
-    n_failed: int
-    seconds: float
-    complete: bool = True
+    elasticity: str = "neo-hookean"
+    linear: FingerRelease | None = None
+    U_A_lower: float = 0.0
+    U_L_reached: bool = True
+    contact_force: float = 0.0
+    n_failed: int = 0
     exact: bool = True
-    noise_relative: float = 0.0
     barrier: float = 0.0
-    contact_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)), repr=False)
-
-    def __getattr__(self, name: str) -> Any:
-        # the lattice, the rotation centre, the critical distance, ``place``: the linear
-        # release's (the same mesh and lattice), for the pictures and the printed lines
-        if name.startswith("__") or name == "linear":
-            raise AttributeError(name)
-        return getattr(self.linear, name)
-
-    @property
-    def U_A_infinite(self) -> bool:
-        return math.isinf(self.U_A)
 
     @property
     def verdict(self) -> str:
@@ -451,22 +404,6 @@ class FiniteStrainFingerRelease:
         if self.exact or not self.U_A > self.U_A_error or (not self.strict and not self.caged):
             return "not held"
         return "undecided"
-
-
-    @property
-    def warnings(self) -> tuple[str, ...]:
-        out = tuple(self.linear.warnings)
-        if not self.exact:
-            out += (UPPER_BOUND_NOTE, f"the finite-strain search of the whole lattice ran out "
-                    f"of its budget: U_A is at least {self.U_A_lower:.4g} J (every path "
-                    "climbs that high); raise --max-seconds for the lattice's value")
-        if self.n_failed:
-            out += (f"{self.n_failed} placements could not be solved at finite strain (Newton "
-                    "failed after every step halving); no path goes through them",)
-        if not self.U_L_reached:
-            out += ("the finite-strain load path stopped before the strain reached e_L: U_L is "
-                    "the work to where it stopped, a lower bound",)
-        return out
 
     def linear_model_error(self) -> dict[str, float | None]:
         """Relative difference ``(linear − finite strain) / finite strain`` of the start's
@@ -484,59 +421,52 @@ class FiniteStrainFingerRelease:
                 "quality": rel(lin.quality, self.quality), "sigma_star": None}
 
     def to_dict(self) -> dict:
-        """The release keys of :meth:`.escape.FingerRelease.to_dict` with the
-        finite-strain values, plus ``elasticity``, ``U_A_is_upper_bound``, ``U_A_lower``,
-        ``linear_model_error`` and the linear values under ``linear`` (SPEC §8), SI."""
+        """:meth:`.escape.FingerRelease.to_dict` of the finite-strain values, plus
+        ``elasticity``, ``finite_strain_verdict``, ``U_A_is_upper_bound``, ``U_A_lower``,
+        ``U_L_reached``, ``linear_model_error`` and the linear values under ``linear``
+        (SPEC §8), SI."""
 
         def num(v):
             return None if v is None or not math.isfinite(v) else float(v)
 
+        out = super().to_dict()
         lin = self.linear.to_dict()
-        out = dict(lin)
-        rel = dict(lin["release"])
-        rel.update({"equilibrium_placement": self.equilibrium.tolist(),
-                    "equilibrium_energy": float(self.energy),
-                    "grid": {**rel["grid"], "U_A_levels": [num(u) for u in self.U_A_levels]},
-                    "strain_at_equilibrium": float(self.strain),
-                    "strain_at_saddle": None,
-                    "placements_solved": int(self.n_evaluations),
-                    "placements_failed": int(self.n_failed),
-                    "noise_floor_relative": float(self.noise_relative),
-                    "complete": bool(self.complete),
-                    "finite_strain_search": "whole lattice" if self.exact else "budget: bracket",
-                    "energy_model": self.elasticity,
-                    "warnings": list(self.warnings),
-                    "seconds": float(self.seconds),
-                    "closure_rule": ("thm1_at_rest" if self.by_theorem1
-                                     else "U_A_lower_beyond_error")})
+        out["release"].update({
+            "placements_failed": int(self.n_failed),
+            "finite_strain_search": "whole lattice" if self.exact else "budget: bracket",
+            "energy_model": self.elasticity,
+            "closure_rule": "thm1_at_rest" if self.by_theorem1 else "U_A_lower_beyond_error"})
         out.update({
-            "U_A": num(self.U_A),
-            "U_A_infinite": math.isinf(self.U_A),
-            "U_A_error": num(self.U_A_error),
             "U_A_is_upper_bound": not self.exact,
             "U_A_lower": num(self.U_A_lower),
             "U_A_lower_infinite": math.isinf(self.U_A_lower),
             "barrier_unresolved": self.barrier if self.U_A == 0.0 and self.barrier > 0 else None,
-            "deform_closure": bool(self.deform_closure),
-            "strict_minimum": bool(self.strict),
-            "caged": bool(self.caged),
-            "quality": num(self.quality),
-            "quality_infinite": math.isinf(self.quality),
-            "U_L": num(self.U_L),
-            "U_L_infinite": math.isinf(self.U_L),
             "U_L_reached": bool(self.U_L_reached),
-            "escape_path": {"placements": self.path.tolist(),
-                            "energy": [num(e) for e in self.path_energy],
-                            "saddle": self.saddle, "target": self.target},
-            "release": rel,
             "elasticity": self.elasticity,
             "finite_strain_verdict": self.verdict,
             "linear_model_error": self.linear_model_error(),
-            "linear": {k: lin[k] for k in ("U_A", "U_A_infinite", "U_A_error", "deform_closure",
-                                         "quality", "quality_infinite", "U_L", "U_L_infinite")},
+            "linear": {**{k: lin[k] for k in ("U_A", "U_A_infinite", "U_A_error", "deform_closure",
+                                            "quality", "quality_infinite", "U_L", "U_L_infinite")},
+                       "equilibrium_energy": lin["release"]["equilibrium_energy"]},
         })
-        out["linear"]["equilibrium_energy"] = lin["release"]["equilibrium_energy"]
         return out
+
+
+def _notes(linear: FingerRelease, exact: bool, lower: float, n_failed: int,
+           reached: bool) -> tuple[str, ...]:
+    """The finite-strain release's warnings."""
+    out = tuple(linear.warnings)
+    if not exact:
+        out += (UPPER_BOUND_NOTE, f"the finite-strain search of the whole lattice ran out of "
+                f"its budget: U_A is at least {lower:.4g} J (every path climbs that high); "
+                "raise --max-seconds for the lattice's value")
+    if n_failed:
+        out += (f"{n_failed} placements could not be solved at finite strain (Newton failed "
+                "after every step halving); no path goes through them",)
+    if not reached:
+        out += ("the finite-strain load path stopped before the strain reached e_L: U_L is the "
+                "work to where it stopped, a lower bound",)
+    return out
 
 
 def transfer_operator(mesh: Any, other: Any):
@@ -683,16 +613,16 @@ def finite_strain_release(mesh: Any, fingers: Sequence[Finger], linear: FingerRe
     say(f"finite strain: U_A = {U_A:.6g} J" + ("" if exact else f" (upper), >= {lower:.6g} J")
         + f"; {land.n_evaluated} placements solved")
     return FiniteStrainFingerRelease(
-        elasticity=elasticity, linear=linear, U_A=float(U_A), U_A_lower=float(lower),
-        U_A_error=float(U_err), deform_closure=deform, strict=bool(strict),
-        caged=bool((not strict) and held), by_theorem1=thm1, equilibrium=g_start,
-        energy=float(Es), path=np.array([grid.placement(k) for k in path]).reshape(-1, 3),
-        path_energy=Ep, saddle=saddle, target=res.target, U_A_levels=levels_U,
-        U_L=float(U_L), U_L_reached=bool(reached),
-        quality=float(min(U_A, U_L) if deform else 0.0), strain=float(e_star),
+        U_A=float(U_A), U_A_error=float(U_err), deform_closure=deform, strict=bool(strict),
+        caged=bool((not strict) and held), equilibrium=g_start, energy=float(Es),
+        path=np.array([grid.placement(k) for k in path]).reshape(-1, 3), path_energy=Ep,
+        saddle=saddle, target=res.target, noise_relative=float(tau), grid=grid,
+        U_A_levels=levels_U, U_L=float(U_L), quality=float(min(U_A, U_L) if deform else 0.0),
+        strain=float(e_star), saddle_strain=None, critical_distance=float(ell), e_L=e_L,
+        n_evaluations=land.n_evaluated, complete=bool(res.complete),
+        seconds=time.perf_counter() - t0, centroid=linear.centroid.copy(), contact_forces=forces,
+        warnings=_notes(linear, exact, lower, fs.n_failed, reached), by_theorem1=thm1,
+        elasticity=elasticity, linear=linear, U_A_lower=float(lower), U_L_reached=bool(reached),
         contact_force=float(np.linalg.norm(forces, axis=1).sum()) if len(forces) else 0.0,
-        n_evaluations=land.n_evaluated, n_failed=fs.n_failed,
-        seconds=time.perf_counter() - t0, complete=bool(res.complete), exact=exact,
-        noise_relative=float(tau),
-        barrier=float(Ep.max() - Es) if len(Ep) and math.isfinite(float(Ep.max())) else 0.0,
-        contact_forces=forces)
+        n_failed=fs.n_failed, exact=exact,
+        barrier=float(Ep.max() - Es) if len(Ep) and math.isfinite(float(Ep.max())) else 0.0)
