@@ -12,20 +12,25 @@ fingers' true surfaces, no flank cap) and a nonlinear material law
 2. **The whole lattice.** The one minimax search
    (:func:`deformclosure.landscape.search.minimax_escape`, through
    :meth:`.escape.PlacementLandscape.search`) on the finite-strain energies, with the
-   linear model's targets (released placements, other equilibria beyond the noise floor)
-   and its noise floor. When it finishes within its budget (placements, seconds) its
-   barrier is *the* lattice's finite-strain ``U_A``, not a bound. The linear escape path
-   is no guide to it: on the notched bar seated between two discs (723 nodes) the
-   finite-strain escape climbs 4.96 mJ where the linear one climbs 9.22 mJ, and the
-   linear path re-solved climbs 27.5 mJ.
+   linear model's targets (released placements, other equilibria beyond the noise floor).
+   The noise floor is this model's: the twin mesh solved at finite strain from the
+   landscape's own states (:func:`transfer_operator`; from rest it would measure the
+   branches a placement can have at finite strain, not the mesh), at least the linear
+   model's. When the search finishes within its budget (placements, seconds) its barrier
+   is *the* lattice's finite-strain ``U_A``, not a bound. The linear escape path is no
+   guide to it: on the notched bar seated between two discs (723 nodes, node rows only)
+   the finite-strain escape climbed 4.96 mJ where the linear one climbs 9.22 mJ, and the
+   linear path re-solved climbed 27.5 mJ.
 3. **Past the budget: a bracket.** Everything the search settled lies below the level it
    reached, so that level is a lower bound; the start, the linear model's coarse escape
    path and their six lattice neighbours, searched as a sub-landscape, give a path and
    so an upper bound (``U_A``, ``U_A_is_upper_bound``), and the cut around that search's
    settled set (:func:`deformclosure.landscape.search.cut_level`) a second lower bound.
    ``U_A_lower`` is the larger. The verdict (``deform_closure``) is decided on
-   ``U_A_lower``: held when it exceeds the error estimate (at rest with the rigid part in
-   form closure, Thm 1, when it is positive).
+   ``U_A_lower``: held when it is beyond the noise floor at its own level and beyond the
+   lattice's change near the saddle (at rest with the rigid part in form closure, Thm 1,
+   when it is positive); a bracket that straddles the error is ``"undecided"``
+   (:attr:`FiniteStrainFingerRelease.verdict`).
 4. **The nonlinear saddle.** The path is searched again near *its own* (finite-strain)
    saddle on lattices halved ``levels`` times, as the linear model does near its saddle
    (:func:`.escape._refine`).
@@ -41,8 +46,8 @@ Every placement is solved from a solved lattice neighbour (a one-step move, cont
 halved steps when Newton does not converge at once) or, when none is solved, from the part
 at rest along the pre-squeeze load path: each overlapping finger backed away along its
 retreat direction until the undeformed part clears it (its *clearance*), then brought in
-(:meth:`FiniteStrainPlacements.clearance`). A placement that cannot be reached counts as inadmissible (no path through it) and
-the report counts them. Discs press like round pads on their axes, carried by the finger
+(:meth:`FiniteStrainPlacements.clearance`). A placement that cannot be reached counts as
+inadmissible (no path through it) and the report counts them. Discs press like round pads on their axes, carried by the finger
 behind them (as in the linear placement model, but without its flank cap); half-planes are
 exact; point and polygon fingers are refused (a point force has no finite-strain answer;
 polygon corners would press between the nodes the rows watch).
@@ -91,10 +96,9 @@ class FiniteStrainPlacements:
 
     Parameters
     ----------
-    mesh : Mesh
-        The part at rest (m), with its material.
-    fingers : sequence of Finger
-        The fixed fingers (m, world frame = the part's frame at rest).
+    mesh, fingers
+        As :class:`.placement_energy.PlacementEnergy` (m); fingers with a finite-strain
+        body only (:meth:`Finger.obstacle`).
     disc_axes : ndarray, shape (n_fingers, 2)
         Pressing directions of the disc fingers (:func:`.placement_energy.disc_axes`).
     centroid : array_like (2,)
