@@ -1,4 +1,5 @@
-"""Frictionless contact of rigid capsules with a part at finite strain (SPEC §8).
+"""Frictionless contact of rigid bodies (capsules, half-planes) with a part at finite
+strain (SPEC §8).
 
 At one position of the rigid bodies the part's displacement ``u`` (m, DOFs
 ``[x0, y0, x1, y1, …]``) solves
@@ -8,16 +9,21 @@ At one position of the rigid bodies the part's displacement ``u`` (m, DOFs
 with ``Ψ`` the stored energy of any material law that gives its energy, gradient and
 tangent (:class:`deformclosure.elasticity.neohookean.NeoHookean`, or the linear law
 :class:`deformclosure.elasticity.linear_energy.LinearEnergy`), ``g_j`` the *exact*
-signed distance of boundary node ``j``'s current position to a rigid capsule (no
+signed distance of boundary node ``j``'s current position to a rigid body (no
 linearisation: sliding along a round pad and contact on its flanks are right at any
-squeeze) and ``G`` the gauge's linear functionals (SPEC §6/§8: mean cross-axis
-displacement and mean rotation ω on a grasp axis). The stationarity conditions
+squeeze) — or, for an *edge row*, of a round end's centre to a boundary edge less its
+radius (:class:`FiniteStrainContact`'s ``edges``) — and ``G`` the gauge's linear
+functionals (SPEC §6/§8: mean cross-axis displacement and mean rotation ω on a grasp
+axis; mean displacement and ω for a placement among fingers). The stationarity
+conditions
 
     ∇Ψ(u) − Σ_j λ_j ∇g_j(u) − Gᵀ μ = 0,   G u = 0,   λ ≥ 0, g ≥ 0, λ_j g_j = 0
 
 are solved by a primal–dual active-set Newton method (Hintermüller, Ito & Kunisch,
 SIAM J. Optim. 13 (2003), the semismooth Newton method for ``min(λ, c g) = 0``) with a
-backtracking line search on the residual; ``λ_j`` is the normal force (N) of row ``j``
+backtracking line search on the residual (and, once an active set repeats with edge
+rows, the linearised problem's own step, :meth:`FiniteStrainContact._qp_step`); ``λ_j`` is
+the normal force (N) of row ``j``
 (its direction ``∇g_j``, unit: frictionless). Each Newton step solves one sparse KKT
 system of the tangent ``K_T − Σ λ_j ∇²g_j`` (the second term: the curvature of the pad's
 surface under a sliding node), the active rows and the gauge: by a sparse LDLᵀ without
