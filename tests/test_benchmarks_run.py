@@ -22,6 +22,7 @@ QUICK = {
     "bench_accuracy.py": ["--quick"],
     "bench_batch.py": ["--quick"],
     "bench_check.py": ["--quick"],
+    "bench_check_finite_strain.py": ["--quick"],
     "bench_critical_distance.py": ["--quick"],
     "bench_dspace.py": ["--repeat", "1"],
     "bench_fem.py": ["--sizes", "1000", "--repeat", "1"],
