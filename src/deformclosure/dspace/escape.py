@@ -286,15 +286,20 @@ class PlacementLandscape:
             if g.inside(w) and not higher(self.energy(w, warm=v), Ev, max(noise, ROUND_OFF)):
                 ok = False
                 break
-        if ok:
-            h, hp = g.h * step / g.scale, g.h_phi * step / g.scale
-            g0 = g.placement(v)
-            gm = _minimise(self.pe, g0, h, hp)
-            d = gm - g0
-            u = g.axes @ d[:2] / h
-            ok = bool(np.all(np.abs(u) <= 1.0) and abs(d[2]) <= hp and self.pe.energy(gm).energy > 0)
+        ok = ok and self._stays_in_cell(v, step)
         self._eq[key] = ok
         return ok
+
+    def _stays_in_cell(self, v: Key, step: int) -> bool:
+        """Whether the continuous minimum of ``E`` from lattice vertex ``v`` stays in its
+        cell (lattice spacing ``step``) with ``E > 0``: :meth:`is_equilibrium`'s last test."""
+        g = self.grid
+        h, hp = g.h * step / g.scale, g.h_phi * step / g.scale
+        g0 = g.placement(v)
+        gm = _minimise(self.pe, g0, h, hp)
+        d = gm - g0
+        u = g.axes @ d[:2] / h
+        return bool(np.all(np.abs(u) <= 1.0) and abs(d[2]) <= hp and self.pe.energy(gm).energy > 0)
 
     # ---------------------------------------------------------------- noise
     def twin_noise(self, keys: Sequence[Key], floor: float, most: int = 48) -> float:

@@ -66,7 +66,7 @@ from ..contact.compliance import gauge_functionals
 from ..contact.large_deformation import ContactState, FiniteStrainContact, follow_squeeze
 from ..elasticity.finite_strain import law_strain_maximum
 from ..elasticity.neohookean import material_law
-from ..landscape.noise import ROUND_OFF, higher, resolved
+from ..landscape.noise import ROUND_OFF, resolved
 from ..landscape.search import cut_level
 from ..limits import blas_threads
 from .escape import FingerRelease, PlacementLandscape, _barrier, _minimax, _refine
@@ -331,24 +331,11 @@ class FiniteStrainLandscape(PlacementLandscape):
         tw = self.twin.solve_from(self.grid.placement(key), u0)
         return math.inf if tw is None else float(tw.energy)
 
-    def is_equilibrium(self, v, step: int, noise: float) -> bool:
-        """Every one of the 26 lattice neighbours higher beyond the noise floor (the
-        linear landscape's continuous-minimum check needs the linear energy's gradient;
-        a finite-strain target equilibrium is a lattice minimum)."""
-        key = (self.grid.norm(v), step)
-        if key not in self._eq:
-            Ev = self.energy(v)
-            ok = True
-            for d in ((a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)):
-                if d == (0, 0, 0):
-                    continue
-                w = (v[0] + d[0] * step, v[1] + d[1] * step, v[2] + d[2] * step)
-                if self.grid.inside(w) and not higher(self.energy(w, warm=v), Ev,
-                                                      max(noise, ROUND_OFF)):
-                    ok = False
-                    break
-            self._eq[key] = ok
-        return self._eq[key]
+    def _stays_in_cell(self, v, step: int) -> bool:
+        """No continuous-minimum test: it needs the linear energy's gradient; a
+        finite-strain target equilibrium is a lattice minimum (its 26 neighbours higher,
+        :meth:`.escape.PlacementLandscape.is_equilibrium`)."""
+        return True
 
 
 @dataclass(frozen=True, eq=False)
