@@ -87,3 +87,50 @@ def test_contact_path_and_condensation_run_capped(two_threads, monkeypatch):
     np.testing.assert_allclose(c2.path.delta, c.path.delta, rtol=1e-9, atol=1e-15)
     s = np.linspace(0.004, c.sigma0, 7)
     np.testing.assert_allclose(c2.energy(s), c.energy(s), rtol=1e-9, atol=1e-15)
+
+
+def test_cap_holds_in_a_worker_thread_after_the_main_thread_used_it(two_threads):
+    """threadpoolctl lets one 'controlling' thread change a pthreads OpenBLAS pool and
+    silently ignores the others: a block in a worker thread (a Dask job, a thread pool)
+    must still cap the threads after the main thread has entered and left blocks."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with limits.blas_threads():
+        pass
+
+    def inside():
+        with limits.blas_threads():
+            return set(blas_threads_now())
+
+    with ThreadPoolExecutor(1) as pool:
+        assert pool.submit(inside).result() == {limits.BLAS_THREADS}
+    assert set(blas_threads_now()) == {2}
+    with limits.blas_threads():                        # and the main thread again after
+        assert set(blas_threads_now()) == {limits.BLAS_THREADS}
+
+
+def test_cap_stays_while_any_thread_is_inside(two_threads):
+    """The limit is the process's: a thread leaving its block must not lift it under a
+    block still open in another thread (its solves would run on other threads and add in
+    another order), and the last block left restores it."""
+    import threading
+
+    entered, release = threading.Event(), threading.Event()
+    seen: list[set[int]] = []
+
+    def slow_block():
+        with limits.blas_threads():
+            entered.set()
+            release.wait(10)
+            seen.append(set(blas_threads_now()))
+
+    t = threading.Thread(target=slow_block)
+    t.start()
+    assert entered.wait(10)
+    with limits.blas_threads():                        # opened and closed here, meanwhile
+        pass
+    assert set(blas_threads_now()) == {limits.BLAS_THREADS}   # the other block is open
+    release.set()
+    t.join(10)
+    assert seen == [{limits.BLAS_THREADS}]
+    assert set(blas_threads_now()) == {2}

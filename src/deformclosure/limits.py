@@ -34,6 +34,7 @@ imported on first use).
 from __future__ import annotations
 
 import math
+import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
 from numbers import Integral
@@ -330,7 +331,9 @@ def check_body_size(field: str, value: float, diameter: float, lo: float, *,
 BLAS_THREADS: int | None = 1
 
 _CONTROLLER = None
-_DEPTH = 0          # blas_threads blocks entered and not left
+_OPEN_BLOCKS = 0        # blas_threads blocks entered and not left, in all threads
+_LIMITER = None         # the threadpoolctl limit held while any block is open
+_BLOCKS_LOCK = threading.Lock()
 
 
 def _controller():
@@ -351,8 +354,12 @@ def blas_threads() -> Iterator[None]:
     """Run the block with at most :data:`BLAS_THREADS` BLAS threads (restored after).
 
     Put it around a loop over many small solves, or inside one dense step. The limit is
-    the process's (BLAS has no other): entering sets it (about 30 µs), a block nested in
-    another costs nothing, and leaving the outermost restores the threads.
+    the process's (BLAS has no other), so it is counted across threads: the first block
+    entered in any thread sets it (about 30 µs), blocks entered while one is open cost
+    nothing, and only the last block left, in whichever thread, restores the threads. A
+    thread leaving its block therefore never changes the thread count under another
+    thread's solve, whose sums would then be added in another order (plans run on threads
+    as jobs on one Dask worker are bit-identical to one plan alone).
 
     Examples
     --------
@@ -361,16 +368,42 @@ def blas_threads() -> Iterator[None]:
     ...     float(np.ones((3, 3)) @ np.ones(3) @ np.ones(3))
     9.0
     """
-    global _DEPTH
-    if BLAS_THREADS is None or _DEPTH:
+    global _OPEN_BLOCKS, _LIMITER
+    if BLAS_THREADS is None:
         yield
         return
-    with _controller().limit(limits=int(BLAS_THREADS), user_api="blas"):
-        _DEPTH += 1
-        try:
-            yield
-        finally:
-            _DEPTH -= 1
+    with _BLOCKS_LOCK:
+        if _OPEN_BLOCKS == 0:
+            _release_openblas_control()
+            _LIMITER = _controller().limit(limits=int(BLAS_THREADS), user_api="blas")
+            _release_openblas_control()
+        _OPEN_BLOCKS += 1
+    try:
+        yield
+    finally:
+        with _BLOCKS_LOCK:
+            _OPEN_BLOCKS -= 1
+            if _OPEN_BLOCKS == 0:
+                _release_openblas_control()
+                _LIMITER.restore_original_limits()
+                _release_openblas_control()
+                _LIMITER = None
+
+
+def _release_openblas_control() -> None:
+    """Let any thread set OpenBLAS's threads next.
+
+    threadpoolctl ≥ 3.6 lets only one "controlling" thread change a pthreads OpenBLAS
+    pool and silently ignores the others; a limit set without its ``with`` statement
+    keeps that control in the thread that set it, so a block entered later in a worker
+    thread would change nothing. :func:`blas_threads` serialises the changes itself (its
+    lock), so it hands the control back after each one.
+    """
+    from threadpoolctl import OpenBLASController
+
+    release = getattr(OpenBLASController, "clear_controlling_thread", None)
+    if release is not None:              # older threadpoolctl: no controlling thread
+        release(force=True)
 
 
 def format_count(n: float) -> str:
