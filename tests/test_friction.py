@@ -431,6 +431,42 @@ def test_every_breakpoint_obeys_coulomb(mu, angle, offset, width, radius, squeez
         assert not _consistent_rates_exist(lp, path, fc.gap_tol)
 
 
+@pytest.mark.parametrize("scale", [1e-200, 1e200])
+def test_the_path_scales_with_the_problem(scale):
+    """The frictional path is homogeneous: gaps, motions and loads all times ``s`` give the
+    same breakpoints and modes with forces times ``s`` (a 1e-246 N load once gave a path
+    out of balance: its residual tests squared to zero)."""
+    pc = _l_part()
+    axis = GraspAxis.at(np.array([0.0, 4.0]) * MM, 0.2, tuple(pc.centroid))
+    sigma0 = pc.curve(axis, Pad(2 * MM, 1 * MM), 0.0).sigma0
+    curve = pc.curve(axis, Pad(2 * MM, 1 * MM), 0.9 * sigma0)
+    fc = frictional_grasp(pc, curve, 0.4)
+    lp, st0 = fc.loading_problem(0.9 * sigma0, np.array([0.4, 0.0]))
+    assert st0.lam.max() > 0
+    ref = trace_friction(lp, st0, 1.0, gap_tol=fc.gap_tol)
+    s = scale
+    lps = replace(lp, gap=lp.gap * s, gap_rate=lp.gap_rate * s, slip_rate=lp.slip_rate * s,
+                  load=lp.load * s, load_rate=lp.load_rate * s)
+    sts = replace(st0, lam=st0.lam * s, tau=st0.tau * s, y=st0.y * s, slip=st0.slip * s)
+    got = trace_friction(lps, sts, 1.0, gap_tol=fc.gap_tol * s)
+    assert len(ref.p) > 1 and got.ok == ref.ok
+    np.testing.assert_allclose(got.p, ref.p, rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(got.mode, ref.mode)
+    np.testing.assert_allclose(got.lam / s, ref.lam, rtol=1e-8, atol=1e-10 * np.abs(ref.lam).max())
+    np.testing.assert_allclose(got.tau / s, ref.tau, rtol=1e-8, atol=1e-10 * np.abs(ref.lam).max())
+    # a squeeze that leaves no force (the part slips out at this angle): no load, however
+    # small, is balanced, so every path stops where it starts
+    axis = GraspAxis.at(np.array([0.0, 5.0]) * MM, 0.5, tuple(pc.centroid))
+    sigma0 = pc.curve(axis, Pad(2 * MM, 1 * MM), 0.0).sigma0
+    curve = pc.curve(axis, Pad(2 * MM, 1 * MM), 0.9375 * sigma0)
+    fc = frictional_grasp(pc, curve, 1.0)
+    for load in (1.0, scale):
+        lp, st0 = fc.loading_problem(0.9375 * sigma0, np.array([load, 0.0]))
+        assert st0.lam.max() == 0.0
+        path = trace_friction(lp, st0, 1.0, gap_tol=fc.gap_tol)
+        assert list(path.p) == [0.0]
+
+
 # ----------------------------------------------------------------- 6. Cattaneo–Mindlin
 @pytest.mark.slow
 def test_cattaneo_mindlin_stick_zone():

@@ -262,7 +262,12 @@ def _solve_rates(prob: FrictionProblem, mode: np.ndarray):
     s = 1.0 / np.sqrt(np.maximum(np.abs(A).max(axis=1), 1e-300))
     c = 1.0 / np.maximum(np.abs(A * s[:, None]).max(axis=0), 1e-300)
     As = A * s[:, None] * c[None, :]
-    b = rhs * s
+    # The rates are linear in the right-hand side: solve for a unit one, so the residual
+    # tests below neither underflow nor overflow (a 1e-200 N load squares to zero).
+    b_scale = np.abs(rhs).max(initial=0.0)
+    if b_scale == 0.0:
+        return np.zeros(r), np.zeros(r), np.zeros(k)
+    b = (rhs / b_scale) * s
     x = None
     # LU with LAPACK's condition estimate; a (numerically) singular system goes to the
     # least-norm solve below
@@ -282,7 +287,7 @@ def _solve_rates(prob: FrictionProblem, mode: np.ndarray):
         if not (np.all(np.isfinite(x))
                 and np.linalg.norm(As @ x - b) <= _RESIDUAL * max(np.linalg.norm(b), 1e-300)):
             return None
-    x = x * c
+    x = x * (c * b_scale)
     nj = len(J)
     dlam, dtau = np.zeros(r), np.zeros(r)
     dlam[J], dtau[J] = x[:nj], x[nj:2 * nj]
