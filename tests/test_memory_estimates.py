@@ -197,10 +197,11 @@ def test_plan_refuses_up_front_a_verification_that_would_not_fit(monkeypatch):
 
 @pytest.mark.parametrize("e_L", [0.8, 0.05, 1e-12, 50.0])
 def test_elastic_limit_in_chunks_equals_all_breakpoints_at_once(e_L):
-    """``pad_elastic_limit`` with its breakpoints in groups (bounded memory) returns the
-    same σ_L, critical element, breakpoint maxima and element maximum (to 1e-12) as the
-    rule on every breakpoint at once (the implementation before the groups), on axes of
-    the notched bar: limits reached inside a piece, at the first breakpoint, never."""
+    """``pad_elastic_limit`` scanning its breakpoints in order in groups (bounded memory,
+    none solved past the crossing) returns the same σ_L, critical element, breakpoint
+    maxima up to the crossing and element maximum (to 1e-12) as the rule on every
+    breakpoint at once (the implementation before the groups), on axes of the notched
+    bar: limits reached inside a piece, at the first breakpoint, never."""
     import deformclosure as dc
     import deformclosure.pads.limit as pl
     from deformclosure.landscape.limit import path_elastic_limit
@@ -214,7 +215,8 @@ def test_elastic_limit_in_chunks_equals_all_breakpoints_at_once(e_L):
         hit = lim.crossing
         sigma = curve.sigma_end if not hit.reached else \
             max(float(curve.sigma_at(float(hit.interpolate(curve.path.delta)))), 0.0)
-        return sigma, lim.critical_element, lim.e_breakpoints, lim.element_max
+        used = hit.piece[1] + 1 if hit.reached else len(curve.path.lam)
+        return sigma, lim.critical_element, lim.e_breakpoints[:used], lim.element_max
 
     mesh = dc.mesh_part(dc.notched_part(1.0))
     pc = PadContact(mesh)
@@ -224,16 +226,24 @@ def test_elastic_limit_in_chunks_equals_all_breakpoints_at_once(e_L):
         if c.path is None or len(c.path.lam) < 4:
             continue
         old = pl.BREAKPOINT_CHUNK_BYTES
+        solved = []
+        strains = pl._breakpoint_strains
         try:
             pl.BREAKPOINT_CHUNK_BYTES = 1.0                 # groups of 2 breakpoints
+            pl._breakpoint_strains = lambda s, cv, idx: solved.extend(idx) or strains(s, cv, idx)
             got = pl.pad_elastic_limit(pc, c, e_L)
         finally:
             pl.BREAKPOINT_CHUNK_BYTES = old
+            pl._breakpoint_strains = strains
         sigma, elem, e_bp, e_max = reference(pc, c, e_L)
         # the same to rounding: a solve of fewer load columns rounds in other places
         assert got.sigma_L == pytest.approx(sigma, rel=1e-12, abs=1e-18)
         assert got.critical_element == elem
         np.testing.assert_allclose(got.e_breakpoints, e_bp, rtol=1e-12, atol=1e-18)
         assert got.element_max_at_limit == pytest.approx(e_max, rel=1e-12, abs=1e-18)
+        # every breakpoint solved once, none past the group of two holding the crossing
+        # (the crossing piece's first one again, when the piece spans two groups)
+        assert max(solved) < min(len(e_bp) + 1, len(c.path.lam))
+        assert len(solved) <= len(e_bp) + 3
         checked += 1
     assert checked >= 2

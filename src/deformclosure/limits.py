@@ -230,6 +230,9 @@ PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.075
 #: than the boundary count predicts (a 53 000-node adaptive level: ~200 breakpoints,
 #: 1.5 GB before the groups).
 PADS_LIMIT_CHUNK_BYTES = 200e6
+#: Most breakpoints the pads' elastic limit solves together as it scans the path in order
+#: for the crossing (``pads.limit.SCAN_GROUP``; none past the crossing is solved).
+PADS_LIMIT_GROUP = 16
 
 #: The placement landscape's compiled kernels (numba, loaded from the cache) and their
 #: per-part arrays, held by ``check`` beside its solvers: measured 41-50 MB at 2 500 to
@@ -855,7 +858,7 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # the elastic limit's fields, their averages and the noise floor on the finest mesh
         # breakpoints held at once: those the boundary predicts, at most a group's
         group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
-        breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group)
+        breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group, PADS_LIMIT_GROUP)
         out["level"] = 0.0 if not path_limit else AVERAGING_CHUNK_BYTES + (
             PADS_LEVEL_BYTES_PER_TRIANGLE
             + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
