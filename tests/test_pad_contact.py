@@ -449,3 +449,21 @@ def test_energy_continuous_where_a_node_enters_reach():
             U.append(float(c.energy(sigma)))
         assert U[0] > 0
         assert U[0] == pytest.approx(U[1], rel=1e-6), (rim, U)   # a 2 nm move: smooth
+
+
+@settings(max_examples=15, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), k=st.integers(1, 9))
+def test_element_strains_of_many_columns_equal_the_strain_module(seed, k):
+    """The solver's element strains of ``k`` displacement columns at once equal
+    :func:`deformclosure.elasticity.strain.element_strains` of each column alone (the
+    mesh's own strain-displacement rule, written independently of the batched product)."""
+    from deformclosure.elasticity.strain import element_strains
+
+    mesh = l_mesh() if seed % 2 else block_mesh()
+    pc = PadContact(mesh)
+    U = np.random.default_rng(seed).normal(scale=1e-4, size=(2 * mesh.n_nodes, k))
+    got = pc.element_strains(U)
+    assert got.shape == (k, mesh.n_triangles, 3)
+    for j in range(k):
+        want = element_strains(mesh, U[:, j])
+        np.testing.assert_allclose(got[j], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())

@@ -44,7 +44,8 @@ import scipy.sparse as sp
 from ..elasticity.condense import CondensedCompliance
 from ..elasticity.critical_distance import averaging_operator
 from ..elasticity.solve import rigid_modes
-from ..elasticity.stiffness import element_b_matrices, stiffness_matrix
+from ..elasticity.stiffness import stiffness_matrix
+from ..elasticity.strain import element_strain_columns
 from ..limits import blas_threads
 
 __all__ = ["BoundaryCompliance", "gauge_functionals", "nodal_areas", "mean_rotation_row"]
@@ -166,7 +167,6 @@ class BoundaryCompliance:
         self.G = G
         self._R, self._H = R, H
         self.diameter = mesh.diameter
-        self._B: np.ndarray | None = None
         self._averaging: dict[float, sp.csr_matrix] = {}
 
     @classmethod
@@ -221,18 +221,10 @@ class BoundaryCompliance:
         columns ``U`` (m), shape ``(2n, k)``, as an array ``(k, m, 3)``.
 
         The same numbers as :func:`deformclosure.elasticity.strain.element_strains` on each
-        column, with the strain-displacement matrices built once per mesh.
+        column (:func:`~deformclosure.elasticity.strain.element_strain_columns`: one sparse
+        product with the mesh's strain operator, built once per mesh).
         """
-        mesh = self.mesh
-        if self._B is None:
-            self._B, _ = element_b_matrices(mesh.nodes, mesh.triangles)
-        tri, n = mesh.triangles, mesh.n_nodes
-
-        def strains(u: np.ndarray) -> np.ndarray:
-            ue = np.asarray(u, float).reshape(n, 2)[tri].reshape(len(tri), 6)
-            return np.einsum("mij,mj->mi", self._B, ue)
-
-        return np.stack([strains(U[:, j]) for j in range(U.shape[1])])
+        return element_strain_columns(self.mesh, U)
 
     def averaging_operator(self, ell: float) -> sp.csr_matrix:
         """The critical-distance averaging operator of this mesh for ``ell`` (m)
