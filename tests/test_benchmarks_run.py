@@ -37,6 +37,7 @@ QUICK = {
     "bench_pads.py": ["--quick"],
     "bench_plan.py": ["--quick"],
     "bench_plan_eps.py": ["--quick"],
+    "bench_scale.py": ["--quick"],
     "bench_threads.py": ["--quick"],
     "convergence.py": [],
     "convergence_pads.py": [],
