@@ -357,3 +357,30 @@ def test_maxima_in_groups_of_fields_equal_all_at_once(seed, args, cells, k, kind
     np.testing.assert_array_equal(v_grp, v_all)
     np.testing.assert_array_equal(e_grp, e_all)
     assert_maxima(disc, reference_operator(mesh, ell), E)
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), args=mesh_args, cells=ell_cells,
+       cap=st.sampled_from([0, 200, 5_000, 10**9]), requests=st.integers(1, 6))
+def test_kept_rows_equal_the_full_operator(seed, args, cells, cap, requests):
+    """Rows of ``W`` reused by :meth:`DiscAverage.reusing_rows` — with a pool that holds
+    everything, one that fills and starts again (200 pairs), one that holds nothing — are
+    the reference operator's rows, in the order asked (repeats included), and the maxima of
+    a sequence of stacks are the reference's."""
+    rng = np.random.default_rng(seed)
+    mesh = grid_mesh(rng, **args)
+    ell = cells * args["scale"] * min(1.0, args["stretch"])
+    W = reference_operator(mesh, ell)
+    m = mesh.n_triangles
+    disc = DiscAverage(mesh, ell)
+    with disc.reusing_rows(max_bytes=12 * cap):
+        with disc.reusing_rows():                       # nested: the outer pool serves
+            pass
+        for _ in range(requests):
+            rows = rng.integers(0, m, int(rng.integers(1, 2 * m + 1)))
+            got = disc.operator_rows(rows)
+            want = W[rows]
+            assert got.shape == want.shape
+            np.testing.assert_allclose(got.toarray(), want.toarray(), rtol=1e-14, atol=0)
+            assert_maxima(disc, W, fields(rng, mesh, int(rng.integers(1, 4)), "corner"))
+    assert disc._pool is None                           # dropped at the end

@@ -230,6 +230,14 @@ PADS_BREAKPOINTS_PER_BOUNDARY_NODE = 0.075
 #: than the boundary count predicts (a 53 000-node adaptive level: ~200 breakpoints,
 #: 1.5 GB before the groups).
 PADS_LIMIT_CHUNK_BYTES = 200e6
+#: Largest memory (bytes) of the rows of the averaging operator that the elastic limit's
+#: scan keeps for reuse across its groups of breakpoints
+#: (``critical_distance.DiscAverage.reusing_rows``; 12 bytes a pair). They grow like the
+#: square of the triangles at a fixed ℓ (a disc's size and the number of hot discs both
+#: ∝ m): measured 10.3 M pairs, 124 MB, at 80 000 nodes of the notched bar (160 000
+#: triangles) — counted ``DISC_ROW_POOL_BYTES_PER_TRIANGLE2 · m²`` up to this cap.
+DISC_ROW_POOL_BYTES = 160e6
+DISC_ROW_POOL_BYTES_PER_TRIANGLE2 = 124e6 / 160_000.0 ** 2
 #: Most breakpoints the pads' elastic limit solves together as it scans the path in order
 #: for the crossing (``pads.limit.SCAN_GROUP``; none past the crossing is solved).
 PADS_LIMIT_GROUP = 16
@@ -859,7 +867,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # breakpoints held at once: those the boundary predicts, at most a group's
         group = max(2.0, PADS_LIMIT_CHUNK_BYTES / (16.0 * (4 * n_nodes + 3 * n_triangles)))
         breakpoints = min(PADS_BREAKPOINTS_PER_BOUNDARY_NODE * p, group, PADS_LIMIT_GROUP)
-        out["level"] = 0.0 if not path_limit else AVERAGING_CHUNK_BYTES + (
+        pool = min(DISC_ROW_POOL_BYTES, DISC_ROW_POOL_BYTES_PER_TRIANGLE2 * n_triangles ** 2)
+        out["level"] = 0.0 if not path_limit else AVERAGING_CHUNK_BYTES + pool + (
             PADS_LEVEL_BYTES_PER_TRIANGLE
             + PADS_LIMIT_BYTES_PER_BREAKPOINT_TRIANGLE * breakpoints) * n_triangles
     else:

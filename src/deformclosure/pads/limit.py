@@ -143,21 +143,22 @@ def _limit_in_order(solver: PadContact, curve: GraspCurve, e_L: float, ell: floa
     disc = disc_average(solver.mesh, ell)
     e_parts: list[np.ndarray] = []
     last = None                       # strains of the previous group's last breakpoint
-    for a in range(0, k, group):
-        b = min(a + group, k)
-        E = _breakpoint_strains(solver, curve, range(a, b))
-        e, _ = disc.maxima(E)
-        above = np.flatnonzero(e >= e_L)
-        if not len(above) and b < k:
-            e_parts.append(e)
-            last = E[-1]
-            continue
-        j = a + int(above[0]) if len(above) else k - 1
-        e_parts.append(e[:j - a + 1])
-        lo = max(j - 1, 0)
-        piece = E[lo - a:j - a + 1] if lo >= a else np.concatenate([last[None], E[:j - a + 1]])
-        lim = path_elastic_limit(disc, piece, e_L)
-        break
+    with disc.reusing_rows():         # the groups average the same hot discs
+        for a in range(0, k, group):
+            b = min(a + group, k)
+            E = _breakpoint_strains(solver, curve, range(a, b))
+            e, _ = disc.maxima(E)
+            above = np.flatnonzero(e >= e_L)
+            if not len(above) and b < k:
+                e_parts.append(e)
+                last = E[-1]
+                continue
+            j = a + int(above[0]) if len(above) else k - 1
+            e_parts.append(e[:j - a + 1])
+            lo = max(j - 1, 0)
+            piece = E[lo - a:j - a + 1] if lo >= a else np.concatenate([last[None], E[:j - a + 1]])
+            lim = path_elastic_limit(disc, piece, e_L)
+            break
     e_bp = np.concatenate(e_parts)
     i0, i1 = lim.crossing.piece
     hit = replace(lim.crossing, piece=(i0 + lo, i1 + lo))
