@@ -333,8 +333,10 @@ class _RowPool:
         self.m, self.cap = m, max(int(cap), 0)
         self.start = np.full(m, -1, np.int64)
         self.length = np.zeros(m, np.int64)
-        self.data = np.empty(0)
-        self.indices = np.empty(0, np.int32)
+        # the whole cap, uninitialised: the pages are mapped only as pairs are written, so
+        # memory grows with use and nothing is ever copied to grow
+        self.data = np.empty(self.cap)
+        self.indices = np.empty(self.cap, np.int32)
         self.size = 0
 
     def clear(self) -> None:
@@ -352,11 +354,6 @@ class _RowPool:
     def add(self, rows: np.ndarray, W: sp.csr_matrix) -> None:
         """Keep ``W`` (CSR, row ``k`` = mesh row ``rows[k]``); the caller checked :meth:`fits`."""
         end = self.size + W.nnz
-        if end > len(self.data):                       # grow by half, up to the cap
-            new = min(self.cap, max(end, int(1.5 * len(self.data)), 1024))
-            self.data = np.concatenate([self.data[:self.size], np.empty(new - self.size)])
-            self.indices = np.concatenate([self.indices[:self.size],
-                                           np.empty(new - self.size, np.int32)])
         self.data[self.size:end] = W.data
         self.indices[self.size:end] = W.indices
         self.start[rows] = self.size + W.indptr[:-1]
