@@ -467,3 +467,34 @@ def test_element_strains_of_many_columns_equal_the_strain_module(seed, k):
     for j in range(k):
         want = element_strains(mesh, U[:, j])
         np.testing.assert_allclose(got[j], want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_solvers_built_side_by_side_equal_one_after_the_other(monkeypatch):
+    """``pads.refine.build_solvers`` builds the level's solver and its twin's on two
+    threads: each gives the same curve, energies and displacement fields, bit for bit, as
+    the solver built alone (and one CPU builds them one after the other)."""
+    import deformclosure.pads.refine as refine
+    from deformclosure import notched_part
+    from deformclosure.mesh.generate import twin_mesh
+
+    part = notched_part(1.0)
+    mesh, twin = mesh_part(part, max_area=2e-6), twin_mesh(part, max_area=2e-6)
+    axis, pad = GraspAxis(1.5707963, -0.015), Pad(0.0, 2e-3)
+
+    def fingerprint(pc):
+        c = pc.curve(axis, pad, 0.0)
+        s = np.linspace(c.sigma0, c.sigma_end, 7)
+        F = pc.load_vector(c, c.path.multipliers(c.delta(0.5 * (c.sigma0 + c.sigma_end))))
+        return c.sigma0, np.asarray(c.energy(s)), pc.displacement(F)
+
+    alone = [fingerprint(PadContact(m)) for m in (mesh, twin)]
+    for cpus in (2, 1):
+        monkeypatch.setattr(refine, "_free_cpus", lambda: cpus)
+        built = refine.build_solvers(mesh, twin)
+        for pc, want in zip(built, alone):
+            got = fingerprint(pc)
+            assert got[0] == want[0]
+            np.testing.assert_array_equal(got[1], want[1])
+            np.testing.assert_array_equal(got[2], want[2])
+    solver, none = refine.build_solvers(mesh, None)
+    assert none is None and isinstance(solver, PadContact)

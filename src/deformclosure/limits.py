@@ -859,7 +859,8 @@ def estimate_model_bytes(model: str, *, n_nodes: int, n_triangles: int, n_bounda
         # a twin has fewer nodes, but not always a shorter boundary (a ring's vertices are
         # kept: a 2000-vertex circle's twin has 2000 boundary nodes too): whole solvers here
         out["boundary"] = PADS_SOLVER_BYTES_PER_P2 * math.ceil(k - 1e-9) * p * p
-        out["condensing"] = PADS_WORK_BYTES_PER_P2 * p * p
+        # the level's solver and its twin's are built side by side (pads.refine.build_solvers)
+        out["condensing"] = PADS_WORK_BYTES_PER_P2 * p * p * min(k, 2.0)
         out["landscape"] = PADS_AXIS_BYTES_PER_NODE * int(n_axes) * p
         # rows of the averaging operator in chunks, never the whole operator (SPEC §6)
         out["averaging"] = AVERAGING_CHUNK_BYTES + AVERAGING_BYTES_PER_TRIANGLE * n_triangles
