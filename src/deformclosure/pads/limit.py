@@ -97,7 +97,10 @@ def pad_elastic_limit(solver: PadContact, curve: GraspCurve, e_L: float,
     # solve's and the strains' temporaries, about twice that
     per = max(2, int(BREAKPOINT_CHUNK_BYTES // (16.0 * (4 * mesh.n_nodes + 3 * mesh.n_triangles))))
     if operator is None:            # the one rule (landscape.limit), on the discs it needs
-        return _limit_in_order(solver, curve, e_L, ell, min(per, SCAN_GROUP))
+        # a group's strain stack (24 bytes per triangle and breakpoint) kept below the
+        # allocator's 32 MB ceiling, so it reuses the heap instead of mapping fresh pages
+        fits = max(2, int(SCAN_GROUP_BYTES // (24.0 * mesh.n_triangles)))
+        return _limit_in_order(solver, curve, e_L, ell, min(per, SCAN_GROUP, fits))
     E = _breakpoint_strains(solver, curve, range(k))             # (k, m, 3)
     # a given operator: the rule on every averaged element of every breakpoint
     Ebar = averaged_strains(mesh, E, None, operator=operator)
@@ -125,6 +128,10 @@ BREAKPOINT_CHUNK_BYTES = PADS_LIMIT_CHUNK_BYTES
 #: of 4 / 8 / 16 / 32 3.5 / 2.9 / 2.5 / 3.3 s — faster even where every breakpoint is
 #: needed (the (k, m, 3) stacks of all at once thrash the caches).
 SCAN_GROUP = PADS_LIMIT_GROUP
+#: Largest strain stack (bytes) of one group: glibc maps every block above 32 MB afresh
+#: and a fresh page costs a fault on first touch — at 80 000 nodes a group of 16 (61 MB)
+#: spent 1.0 s of the scan's 7.5 s in its strain products, a group of 8 (31 MB) 0.27 s.
+SCAN_GROUP_BYTES = 30e6
 
 
 def _breakpoint_strains(solver: PadContact, curve: GraspCurve, idx) -> np.ndarray:
