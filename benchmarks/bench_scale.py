@@ -34,6 +34,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bench_threads import blas_env
+
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 #: The notched bar's area (mm²) and Triangle's triangles per (area / max_area) at its
 #: default min_angle (``bench_memory.py``'s measured factor).
@@ -68,11 +70,7 @@ SETUPS = ("1 thread", "default")
 
 def run(setup: str, cmd: str, params: dict) -> dict:
     """One case in a fresh interpreter; its RESULT line."""
-    env = dict(os.environ)
-    for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        env.pop(k, None)
-    if setup == "1 thread":
-        env["OPENBLAS_NUM_THREADS"] = "1"
+    env = blas_env(setup == "1 thread")
     part = str(EXAMPLES / "notched_bar.json")
     out = subprocess.run([sys.executable, "-c", CHILD, cmd, part, json.dumps(params)],
                          env=env, capture_output=True, text=True)

@@ -60,12 +60,19 @@ print(json.dumps({"seconds": took, "quality": rep.data["quality"]}))
 SETUPS = ("uncapped", "capped", "1 thread")
 
 
-def run(setup: str, part: str, max_area: str) -> dict:
+def blas_env(one_thread: bool) -> dict:
+    """This process's environment without BLAS thread settings, or with OpenBLAS held to
+    one thread (``one_thread``): the set-ups the thread benchmarks compare."""
     env = dict(os.environ)
     for k in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         env.pop(k, None)
-    if setup == "1 thread":
+    if one_thread:
         env["OPENBLAS_NUM_THREADS"] = "1"
+    return env
+
+
+def run(setup: str, part: str, max_area: str) -> dict:
+    env = blas_env(setup == "1 thread")
     out = subprocess.run([sys.executable, "-c", CHILD, setup.split()[0], part, max_area],
                          env=env, capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
