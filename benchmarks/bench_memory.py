@@ -162,6 +162,10 @@ def main() -> None:
     if args.quick:
         args.nodes = [n for n in args.nodes if n <= 5000] or [2500]
     folder = Path(tempfile.mkdtemp(prefix="bench_memory_"))
+    unknown = set(args.only or ()) - set(commands(folder))
+    if unknown:
+        ap.error(f"--only {sorted(unknown)}: not a command of this benchmark; choose from "
+                 f"{sorted(commands(folder))}")
     print(f"{'command':<22} {'nodes':>7} {'est (GB)':>9} {'peak (GB)':>10} {'est/peak':>9} "
           f"{'time (s)':>9}  within +25 %", flush=True)
     all_met = True

@@ -34,6 +34,7 @@ QUICK = {
     "bench_grasp.py": ["--quick"],
     "bench_import.py": ["startup"],
     "bench_memory.py": ["--nodes", "2500", "--only", "optimize --refine 1"],
+    "bench_condense.py": ["--quick"],
     "bench_pads.py": ["--quick"],
     "bench_plan.py": ["--quick"],
     "bench_plan_eps.py": ["--quick"],
