@@ -489,7 +489,7 @@ def test_solvers_built_side_by_side_equal_one_after_the_other(monkeypatch):
 
     alone = [fingerprint(PadContact(m)) for m in (mesh, twin)]
     for cpus in (2, 1):
-        monkeypatch.setattr(refine, "_free_cpus", lambda: cpus)
+        monkeypatch.setattr(refine, "usable_cpus", lambda: cpus)
         built = refine.build_solvers(mesh, twin)
         for pc, want in zip(built, alone):
             got = fingerprint(pc)

@@ -34,6 +34,7 @@ imported on first use).
 from __future__ import annotations
 
 import math
+import os
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -81,6 +82,7 @@ __all__ = [
     "kept_bytes",
     "BLAS_THREADS",
     "blas_threads",
+    "usable_cpus",
 ]
 
 GB = 1e9
@@ -358,6 +360,14 @@ def _controller():
 
         _CONTROLLER = ThreadpoolController()
     return _CONTROLLER
+
+
+def usable_cpus() -> int:
+    """The CPUs this process may run on (its affinity; ``os.cpu_count()`` off Linux), >= 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
 
 
 @contextmanager

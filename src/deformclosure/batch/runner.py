@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from ..errors import BatchError
+from ..limits import usable_cpus
 from . import cluster, store, worker
 from .jobs import Job, _version, list_identity
 
@@ -262,8 +263,7 @@ def _run(todo: deque, record: _Recorder, scheduler, workers, client, mp_context)
         for job in todo:
             record(job, _run_here(job, version))
     else:
-        n = workers or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
-                        else os.cpu_count() or 1)
+        n = workers or usable_cpus()
         with worker.worker_environ():  # for spawned workers: set while the pool lives
             pool = _LocalPool(max(1, min(n, len(todo))), mp_context or worker.mp_context())
             try:

@@ -34,7 +34,6 @@ several nodes and the contact elements are at most ℓ/2,
 from __future__ import annotations
 
 import math
-import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -43,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DeformClosureError, GraspError
+from ..limits import usable_cpus
 from ..log import done
 from ..mesh import mesh_part
 from ..mesh.generate import default_max_area, twin_mesh
@@ -395,19 +395,12 @@ def build_solvers(mesh, twin_m) -> tuple[PadContact, PadContact | None]:
     inverse of each release the GIL (at 80 000 nodes the two builds are ~12 s of a 25 s
     ``optimize`` one after the other). The memory estimate counts both builds' transients
     at once (``limits.estimate_model_bytes``, ``condensing``)."""
-    if twin_m is None or _free_cpus() < 2:
+    if twin_m is None or usable_cpus() < 2:
         return PadContact(mesh), None if twin_m is None else PadContact(twin_m)
     with ThreadPoolExecutor(1, thread_name_prefix="deformclosure-twin") as pool:
         twin = pool.submit(PadContact, twin_m)
         solver = PadContact(mesh)
         return solver, twin.result()
-
-
-def _free_cpus() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return os.cpu_count() or 1
 
 
 def traced_axes(known: dict) -> int:

@@ -54,7 +54,6 @@ from __future__ import annotations
 
 import heapq
 import math
-import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
@@ -75,6 +74,7 @@ from ..grasp.elastic_limit import elastic_limit_separation
 from ..grasp.release import release_energies
 from ..grasp.separation import lipschitz_constant, optimize_separation_arrays, vertex_energies
 from ..geometry import touch_tolerance
+from ..limits import usable_cpus
 from ..units import SI_UNITS
 
 __all__ = ["PlanResult", "plan_grasps", "pair_elastic_limits", "lattice", "SETTLED"]
@@ -87,11 +87,7 @@ SETTLED = ("zero", "bounds", "exact")
 
 def _workers() -> int:
     """Threads for the GIL-free kernels: the CPUs this process may use (at most 8)."""
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        n = os.cpu_count() or 1
-    return max(1, min(n, 8))
+    return min(usable_cpus(), 8)
 
 
 # --------------------------------------------------------------------------- kernels
