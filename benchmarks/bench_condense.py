@@ -45,6 +45,7 @@ import scipy.sparse as sp  # noqa: E402
 import scipy.sparse.linalg as spla  # noqa: E402
 
 import deformclosure as dc  # noqa: E402
+from bench_threads import print_target  # noqa: E402
 from deformclosure.elasticity.condense import CondensedCompliance, _interior_first_order, pinned_dofs_among  # noqa: E402
 from deformclosure.elasticity.stiffness import stiffness_matrix  # noqa: E402
 
@@ -97,11 +98,8 @@ def main() -> None:
         print(f"{mesh.n_nodes:>7,} {Kf.shape[0]:>7,} {len(boundary):>8,} {t_cond:>9.2f} "
               f"{t_own:>15.2f} {t_colamd:>12.2f} {t_ldl:>11.2f} {ratio:>11.2f} {TARGET:>7.1f}  "
               f"{'-' if args.quick else ('yes' if met else 'NO')}", flush=True)
-    if args.quick:
-        print("target: not judged (--quick)")
-    else:
-        print(f"target (condensation within {TARGET}x one symmetric factorisation of K): "
-              f"{'met' if all_met else 'NOT met'}")
+    print_target(args.quick, f"condensation within {TARGET}x one symmetric factorisation of K",
+                 all_met)
 
 
 if __name__ == "__main__":

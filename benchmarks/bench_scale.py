@@ -34,7 +34,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bench_threads import blas_env
+from bench_threads import blas_env, print_target
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 #: The notched bar's area (mm²) and Triangle's triangles per (area / max_area) at its
@@ -120,11 +120,8 @@ def main() -> None:
               + f" {med['default'] / med['1 thread']:>10.2f} {target:>7.0f}  {verdict}"
               + ("" if same else f"  (qualities differ: {min(qual)!r} .. {max(qual)!r})"),
               flush=True)
-    if args.quick:
-        print("target: not judged (--quick)")
-    else:
-        print(f"target (every case within its seconds in both set-ups, same quality): "
-              f"{'met' if all_met else 'NOT met'}")
+    print_target(args.quick, "every case within its seconds in both set-ups, same quality",
+                 all_met)
 
 
 if __name__ == "__main__":

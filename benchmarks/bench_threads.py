@@ -71,6 +71,15 @@ def blas_env(one_thread: bool) -> dict:
     return env
 
 
+def print_target(quick: bool, what: str, met: bool) -> None:
+    """The benchmarks' last line: whether ``what`` (the target) is met, or not judged on a
+    ``--quick`` run."""
+    if quick:
+        print("target: not judged (--quick)")
+    else:
+        print(f"target ({what}): {'met' if met else 'NOT met'}")
+
+
 def run(setup: str, part: str, max_area: str) -> dict:
     env = blas_env(setup == "1 thread")
     out = subprocess.run([sys.executable, "-c", CHILD, setup.split()[0], part, max_area],
